@@ -1,0 +1,75 @@
+"""The Case: a frozen, solver-independent description of one verification scene."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from .geometry import PRISM, RING, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
+from .material import Material
+
+
+@dataclass(frozen=True)
+class Case:
+    """Everything a solver needs, and nothing about how to solve it.
+
+    Attributes
+    ----------
+    body : ``'ring'`` or ``'prism'`` (see :mod:`cases.geometry` for coordinates)
+    section : cross-section block with the paper's mesh counts (before ``refine``)
+    length : prism length along x3 (ring: 2 pi)
+    cutouts : regions of absent material; ``contrast`` scales their stiffness and density
+    symmetric : ``True`` when loads and material are symmetric about x3 = 0 (ring), so the
+        sine family of displacements (u_r, u_z ~ sin) carries nothing
+    provenance : which values come from the paper and which are this project's choices
+    references : published or analytic reference values with their sources
+    """
+
+    name: str
+    title: str
+    body: str
+    section: Section
+    material: Material
+    loads: tuple[Pressure, ...]
+    supports: tuple[Support, ...]
+    probes: tuple[Probe, ...]
+    params: dict
+    length: float = 2 * math.pi
+    cutouts: tuple[Cutout, ...] = ()
+    contrast: float = 1.0
+    initial_velocity: tuple[InitialVelocity, ...] = ()
+    wall: Wall | None = None
+    symmetric: bool = True
+    axisymmetric: bool = False
+    units: str = "SI (m, N, s, Pa, kg/m^3)"
+    provenance: dict = field(default_factory=dict)
+    references: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.body not in (RING, PRISM):
+            raise ValueError(f"body must be {RING!r} or {PRISM!r}")
+
+    @property
+    def dt(self) -> float:
+        return self.params["dt"]
+
+    @property
+    def t_end(self) -> float:
+        return self.params["t_end"]
+
+    @property
+    def n_steps(self) -> int:
+        """Number of time steps: t_end / dt rounded to the nearest integer (at least 1)."""
+        return max(1, int(round(self.t_end / self.dt)))
+
+    @property
+    def refine(self) -> int:
+        return self.params["refine"]
+
+    @property
+    def harmonics(self) -> int:
+        return self.params["harmonics"]
+
+    @property
+    def probe_names(self) -> list[str]:
+        return [p.name for p in self.probes]

@@ -1,0 +1,171 @@
+"""Scene geometry shared by every solver: cross-sections, coordinate conventions, loads, probes.
+
+Coordinate conventions (the one place that defines them)
+---------------------------------------------------------
+Ring body (body of revolution): cross-section coordinates ``x1 = r`` (radius), ``x2 = z``
+(axis), and ``x3 = theta`` in radians, counter-clockwise, in ``[0, 2 pi)``. Displacement
+components 1, 2, 3 are ``u_r``, ``u_z``, ``u_theta``. Cartesian: ``x = r cos(theta)``,
+``y = r sin(theta)``, ``z = z``.
+
+Prismatic body: cross-section coordinates ``x1`` (width) and ``x2`` (height), ``x3`` along the
+length in ``[0, length]``; components 1, 2, 3 are ``u1``, ``u2``, ``u3``. Cartesian: ``x = x3``
+(span), ``y = x1`` (width), ``z = x2`` (height), so that the strip's span runs along ``x``.
+
+A cross-section is one mapped block with parametric axes ``s`` and ``t``:
+``kind = 'rect'`` maps ``(s, t) -> (x1, x2) = (s, t)``;
+``kind = 'polar'`` maps ``(s, t) -> (x1, x2) = (s sin t, s cos t)`` (a spherical-shell section
+of radius ``s`` at polar angle ``t`` from the axis).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+RING = "ring"
+PRISM = "prism"
+
+#: edge names of a section block, in parametric terms
+EDGES = ("s_min", "s_max", "t_min", "t_max")
+
+
+@dataclass(frozen=True)
+class Axis:
+    """A graded 1-D grid: ``breaks[k] .. breaks[k + 1]`` is split into ``counts[k]`` equal parts."""
+
+    breaks: tuple[float, ...]
+    counts: tuple[int, ...]
+    #: False for a direction the solution does not vary along (one element across a plane-strain
+    #: width or axial length): ``refine`` leaves it alone
+    refinable: bool = True
+
+    def __post_init__(self):
+        if len(self.breaks) != len(self.counts) + 1:
+            raise ValueError("Axis needs one more break than counts")
+
+    def grid(self, refine: int = 1) -> np.ndarray:
+        """Node coordinates, shape ``(n_elements + 1,)``, each segment split ``refine`` times more."""
+        refine = refine if self.refinable else 1
+        parts = [
+            np.linspace(a, b, n * refine + 1)[:-1]
+            for a, b, n in zip(self.breaks[:-1], self.breaks[1:], self.counts)
+        ]
+        return np.concatenate(parts + [np.array([self.breaks[-1]])])
+
+    @property
+    def span(self) -> tuple[float, float]:
+        return self.breaks[0], self.breaks[-1]
+
+
+@dataclass(frozen=True)
+class Section:
+    """Cross-section as a structured block; ``edges`` names the block's edges for loads and BCs."""
+
+    kind: str
+    s: Axis
+    t: Axis
+    edges: dict[str, str] = field(default_factory=dict)
+
+    def to_x(self, s, t):
+        """Map parametric ``(s, t)`` to section coordinates ``(x1, x2)``; arrays broadcast."""
+        s, t = np.asarray(s, float), np.asarray(t, float)
+        if self.kind == "rect":
+            return s, t
+        if self.kind == "polar":
+            return s * np.sin(t), s * np.cos(t)
+        raise ValueError(f"unknown section kind {self.kind!r}")
+
+    def edge(self, name: str) -> str:
+        """Parametric edge (one of EDGES) for a named edge or a parametric name."""
+        return name if name in EDGES else self.edges[name]
+
+
+@dataclass(frozen=True)
+class Cutout:
+    """Region of absent material: parametric box of the section times intervals along x3.
+
+    SMFEM models it as contrast material; the reference FEM meshes it as a hole.
+    """
+
+    s_range: tuple[float, float]
+    t_range: tuple[float, float]
+    x3_intervals: tuple[tuple[float, float], ...]
+
+
+@dataclass(frozen=True)
+class Pressure:
+    """Pressure ``q`` (compression positive) normal to the undeformed surface ``edge`` x intervals."""
+
+    q: float
+    edge: str
+    x3_intervals: tuple[tuple[float, float], ...]
+
+
+@dataclass(frozen=True)
+class Support:
+    """Zero displacement of ``components`` (1-based) on ``edge``, or on every node if ``edge='all'``."""
+
+    edge: str
+    components: tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class InitialVelocity:
+    """Uniform initial velocity ``value`` of displacement component ``component``."""
+
+    component: int
+    value: float
+
+
+@dataclass(frozen=True)
+class Wall:
+    """Rigid wall facing the section edge ``edge`` across an initial ``gap``, with friction."""
+
+    edge: str
+    gap: float
+    friction: float
+
+
+@dataclass(frozen=True)
+class Probe:
+    """A recorded quantity.
+
+    kind
+        ``'point'``: ``field`` component at section point ``(x1, x2)`` and ``x3``;
+        ``'max'``: maximum of ``field`` over the body;
+        ``'edge_mean'``: mean of ``field`` component over the face ``edge`` (area-weighted);
+        ``'body_mean'``: mean over the volume (mass-weighted).
+    field
+        ``'u'`` (displacement, m or in), ``'v'`` (velocity), ``'sigma'`` (stress), ``'peps'``
+        (equivalent plastic strain sqrt(2/3 eps_p:eps_p)).
+    component
+        ``(i,)`` for vectors, ``(i, j)`` for stresses, 1-based, in the body's coordinates;
+        ``('n', 'n')`` is the normal stress on ``edge``.
+    """
+
+    name: str
+    kind: str
+    field: str
+    component: tuple = ()
+    point: tuple[float, float, float] | None = None
+    edge: str | None = None
+
+
+def interval_fourier(intervals, l: int, family: str, body: str, length: float = 2 * math.pi) -> float:
+    """Exact integral over ``intervals`` of the basis function of harmonic ``l``.
+
+    Ring: ``cos(l x3)`` (family ``'cos'``) or ``sin(l x3)`` (``'sin'``).
+    Prism: ``sin(l pi x3 / length)`` (``'sin'``) or ``cos(...)`` (``'cos'``).
+    """
+    k = l if body == RING else l * math.pi / length
+    total = 0.0
+    for a, b in intervals:
+        if k == 0:
+            total += (b - a) if family == "cos" else 0.0
+        elif family == "cos":
+            total += (math.sin(k * b) - math.sin(k * a)) / k
+        else:
+            total += (math.cos(k * a) - math.cos(k * b)) / k
+    return total

@@ -1,0 +1,121 @@
+"""The one validated path for parameter overrides (``--set KEY=VALUE``).
+
+Every failure raises :class:`ParameterError` with one line that names the key and the allowed
+range; the command line turns it into exit status 2.
+"""
+
+from __future__ import annotations
+
+import ast
+import math
+from dataclasses import dataclass
+
+
+class ParameterError(ValueError):
+    """A user mistake in a case name, a key or a value."""
+
+
+@dataclass(frozen=True)
+class Spec:
+    """Allowed values of one parameter: type, bounds (inclusive unless ``open_*``), choices."""
+
+    type: type
+    lo: float | None = None
+    hi: float | None = None
+    open_lo: bool = False
+    open_hi: bool = False
+    choices: tuple | None = None
+    help: str = ""
+
+    def describe(self) -> str:
+        if self.choices is not None:
+            return "one of " + ", ".join(map(str, self.choices))
+        if self.type is bool:
+            return "true or false"
+        lo = "-inf" if self.lo is None else f"{self.lo:g}"
+        hi = "inf" if self.hi is None else f"{self.hi:g}"
+        left = "(" if self.open_lo or self.lo is None else "["
+        right = ")" if self.open_hi or self.hi is None else "]"
+        kind = "an integer" if self.type is int else "a finite number"
+        return f"{kind} in {left}{lo}, {hi}{right}"
+
+    def check(self, key: str, value):
+        """Return ``value`` converted to the spec's type, or raise ParameterError."""
+        bad = f"{key}={value!r} is out of range: {key} must be {self.describe()}"
+        if self.type is bool:
+            if isinstance(value, str) and value.lower() in ("true", "false"):
+                value = value.lower() == "true"
+            if not isinstance(value, bool):
+                raise ParameterError(bad)
+            return value
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ParameterError(bad)
+        if self.type is int:
+            if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
+                raise ParameterError(bad)
+            value = int(value)
+        else:
+            value = float(value)
+            if not math.isfinite(value):
+                raise ParameterError(bad)
+        if self.choices is not None and value not in self.choices:
+            raise ParameterError(bad)
+        if self.lo is not None and (value < self.lo or (self.open_lo and value == self.lo)):
+            raise ParameterError(bad)
+        if self.hi is not None and (value > self.hi or (self.open_hi and value == self.hi)):
+            raise ParameterError(bad)
+        return value
+
+
+#: keys every case accepts (CONTRACT.md), plus ``dim`` for the reference solver
+COMMON = {
+    "dt": Spec(float, 0.0, None, open_lo=True, help="time step, s"),
+    "t_end": Spec(float, 0.0, None, open_lo=True, help="end of the time window, s"),
+    "refine": Spec(int, 1, 64, help="multiplies the paper mesh's element counts"),
+    "harmonics": Spec(int, 1, 2000, help="number of Fourier terms kept"),
+    "E": Spec(float, 0.0, None, open_lo=True, help="Young's modulus"),
+    "nu": Spec(float, -1.0, 0.5, open_lo=True, open_hi=True, help="Poisson's ratio"),
+    "rho": Spec(float, 0.0, None, open_lo=True, help="density"),
+    "tau_s": Spec(float, 0.0, None, open_lo=True, help="yield stress in pure shear"),
+    "plastic": Spec(bool, help="elasto-plastic variant"),
+    "tol": Spec(float, 0.0, 1.0, open_lo=True, open_hi=True, help="iteration tolerance"),
+    "dim": Spec(int, choices=(2, 3), help="reference FEM: 2 (plane strain/axisymmetric) or 3"),
+}
+
+
+def parse_value(key: str, text: str):
+    """Parse the VALUE of ``--set KEY=VALUE`` as a Python literal (``1e-5``, ``true``, ``40``)."""
+    if text.lower() in ("true", "false"):
+        return text.lower() == "true"
+    if text.lower() in ("nan", "inf", "-inf", "+inf"):
+        return float(text)
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        raise ParameterError(f"{key}={text!r} is not a value: write a number or true/false") from None
+
+
+def parse_sets(items) -> dict:
+    """Parse a list of ``KEY=VALUE`` strings into a dict (last one wins)."""
+    out = {}
+    for item in items or ():
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or not key or not text.strip():
+            raise ParameterError(f"malformed --set {item!r}: expected KEY=VALUE, e.g. --set dt=1e-5")
+        out[key] = parse_value(key, text.strip())
+    return out
+
+
+def validate(specs: dict[str, Spec], defaults: dict, overrides: dict, case_name: str) -> dict:
+    """Merge ``overrides`` into ``defaults`` after checking every key and value."""
+    params = dict(defaults)
+    for key, value in overrides.items():
+        if key not in specs:
+            raise ParameterError(
+                f"unknown key {key!r} for case {case_name!r}: allowed keys are {', '.join(sorted(specs))}"
+            )
+        params[key] = specs[key].check(key, value)
+    if params["dt"] > params["t_end"]:
+        raise ParameterError(f"dt={params['dt']:g} is out of range: dt must not exceed t_end={params['t_end']:g}")
+    return params
