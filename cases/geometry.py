@@ -96,11 +96,16 @@ class Cutout:
 
 @dataclass(frozen=True)
 class Pressure:
-    """Pressure ``q`` (compression positive) normal to the undeformed surface ``edge`` x intervals."""
+    """Pressure (compression positive) normal to the undeformed surface ``edge``.
+
+    Along x3 it is ``q`` on ``x3_intervals`` and zero elsewhere; with ``mode = l`` it is instead
+    the single Fourier term ``q psi_l(x3)`` (ring: cos(l x3); prism: sin(l pi x3 / length)).
+    """
 
     q: float
     edge: str
-    x3_intervals: tuple[tuple[float, float], ...]
+    x3_intervals: tuple[tuple[float, float], ...] = ()
+    mode: int | None = None
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,51 @@
+"""Global sparse assembly of element blocks for one mode pair, and lumped mass."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from .fourier import ROW_TYPE
+
+
+def element_dofs(elements: np.ndarray) -> np.ndarray:
+    """(n_elements, 12) global dofs, node-major ``3 node + component``."""
+    return (3 * elements[:, :, None] + np.arange(3)).reshape(len(elements), 12)
+
+
+def weighted_elasticity(D: np.ndarray, integrals: np.ndarray) -> np.ndarray:
+    """Elasticity weighted by the x3 integrals of basis products, per element.
+
+    Parameters
+    ----------
+    D : (6, 6) or (n, 6, 6) elasticity matrix
+    integrals : (n, 2, 2) ``int f psi_a^(l) psi_b^(m) dx3`` for row types a, b (0: psi1, 1: psi3)
+        with the element's material factor f(x3)
+
+    Returns
+    -------
+    (n, 6, 6) array ``D[i, j] * integrals[type(i), type(j)]``.
+    """
+    W = integrals[:, ROW_TYPE][:, :, ROW_TYPE]
+    return D * W
+
+
+def assemble(blocks: np.ndarray, elements: np.ndarray, n_nodes: int) -> sp.csr_matrix:
+    """Sum element blocks (n, 12, 12) into a (3 n_nodes, 3 n_nodes) CSR matrix."""
+    dofs = element_dofs(elements)
+    rows = np.repeat(dofs, 12, axis=1).ravel()
+    cols = np.tile(dofs, (1, 12)).ravel()
+    n = 3 * n_nodes
+    return sp.csr_matrix((blocks.ravel(), (rows, cols)), shape=(n, n))
+
+
+def lumped_mass(sqrt_g: np.ndarray, rho_integrals: np.ndarray, elements: np.ndarray, n_nodes: int) -> np.ndarray:
+    """Diagonal of the lumped mass (paper (6)): a quarter of each element's mass to each node.
+
+    ``rho_integrals`` (n, 2) holds ``int rho psi1^2`` and ``int rho psi3^2`` per element; the
+    in-plane components take the first, the x3 component the second. Returns (3 n_nodes,).
+    """
+    per_node = 0.25 * sqrt_g[:, None] * rho_integrals[:, [0, 0, 1]]  # (n, 3)
+    m = np.zeros((n_nodes, 3))
+    np.add.at(m, elements, per_node[:, None, :])
+    return m.ravel()

@@ -1,0 +1,163 @@
+"""Ring and prismatic 4-node elements of the moment scheme (MSFE), batched over elements.
+
+Strain rows are ``[e11, e22, e33, g12, g13, g23]`` (engineering shears) in the element's local
+frame: ``t1`` along the element's first local coordinate at its centre, ``t2`` normal to it in
+the section, ``3`` along x3. Nodal dofs are node-major ``[u1, u2, u3]`` per node in the global
+section axes, so an element operator has 12 columns.
+
+The operator of one harmonic is ``B(p) = Ba + p Bb``, linear in the wavenumber ``p`` (ring: l;
+prism: l pi / length). The moment scheme keeps the centre value ``B0`` and, of the first
+derivatives along the local coordinates ``xi, eta`` in [-1/2, 1/2], only the rows that may vary:
+``d/dxi``: e22, e33, g23; ``d/deta``: e11, e33, g13. With ``int xi^2 = 1/12`` the element
+stiffness is ``sqrt(g) [B0' D B0 + (B1' D B1 + B2' D B2) / 12]`` (paper (3)-(5)).
+The derivatives are taken by complex-step differentiation of the exact strain expressions
+(1/r terms and the varying Jacobian included), which is exact to round-off and carries the
+metric terms h(ii),b of the paper without writing them out.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cases.geometry import RING
+
+#: local node signs (s_i, t_i) of N_i = (s_i xi + 1/2)(t_i eta + 1/2), counter-clockwise
+NODE_S = np.array([-1.0, 1.0, 1.0, -1.0])
+NODE_T = np.array([-1.0, -1.0, 1.0, 1.0])
+#: rows that the scheme lets vary along xi (B1) and along eta (B2)
+ROWS_VARY_XI = np.array([0, 1, 1, 0, 0, 1], bool)
+ROWS_VARY_ETA = np.array([1, 0, 1, 0, 1, 0], bool)
+_STEP = 1e-30  # complex step: no subtractive cancellation, so any tiny step is exact
+
+
+def shape_functions(xi, eta):
+    """Bilinear ``N (.., 4)``, ``dN/dxi``, ``dN/deta`` at local coordinates in [-1/2, 1/2]."""
+    xi, eta = np.asarray(xi)[..., None], np.asarray(eta)[..., None]
+    a, b = NODE_S * xi + 0.5, NODE_T * eta + 0.5
+    return a * b, NODE_S * b, a * NODE_T
+
+
+@dataclass(frozen=True)
+class ElementOperators:
+    """Moment-scheme strain operators of all elements, ``(n_elements, 6, 12)`` each.
+
+    ``B0 = Ba0 + p Bb0`` etc.; ``sqrt_g`` (n_elements,) is |det J| at the centre, times r_c for
+    a ring; ``rotation`` (n_elements, 2, 2) has rows t1, t2.
+    """
+
+    Ba: tuple[np.ndarray, np.ndarray, np.ndarray]
+    Bb: tuple[np.ndarray, np.ndarray, np.ndarray]
+    sqrt_g: np.ndarray
+    rotation: np.ndarray
+
+    def at(self, p: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(B0, B1, B2)`` for wavenumber ``p``, with the rows the scheme drops set to zero."""
+        B0, B1, B2 = (a + p * b for a, b in zip(self.Ba, self.Bb))
+        return B0, B1 * ROWS_VARY_XI[:, None], B2 * ROWS_VARY_ETA[:, None]
+
+
+def local_frame(X: np.ndarray) -> np.ndarray:
+    """(n, 2, 2) rotations with rows t1 (along xi at the centre) and t2 (t1 turned by +90 deg)."""
+    _, dxi, _ = shape_functions(0.0, 0.0)
+    t1 = np.einsum("eia,i->ea", X, dxi)
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    return np.stack([t1, np.column_stack([-t1[:, 1], t1[:, 0]])], axis=1)
+
+
+def strain_rotation(R: np.ndarray) -> np.ndarray:
+    """(n, 6, 6) map of strain rows from global section axes to the frame with rows R."""
+    c, s = R[:, 0, 0], R[:, 0, 1]
+    T = np.zeros((len(R), 6, 6))
+    T[:, 0, 0], T[:, 0, 1], T[:, 0, 3] = c * c, s * s, c * s
+    T[:, 1, 0], T[:, 1, 1], T[:, 1, 3] = s * s, c * c, -c * s
+    T[:, 3, 0], T[:, 3, 1], T[:, 3, 3] = -2 * c * s, 2 * c * s, c * c - s * s
+    T[:, 2, 2] = 1.0
+    T[:, 4, 4], T[:, 4, 5], T[:, 5, 4], T[:, 5, 5] = c, s, -s, c
+    return T
+
+
+def strain_operator(X: np.ndarray, body: str, p: float, xi, eta) -> np.ndarray:
+    """Full strain operator ``(n, 6, 12)`` in global section axes at one local point.
+
+    ``xi`` and ``eta`` may be complex (complex-step differentiation). Ring: x1 = r and
+    e33 = (u1 + p u3) / r, g13 = u3,1 - u3 / r - p u1 / r, g23 = u3,2 - p u2 / r.
+    Prism: e33 = -p u3, g13 = p u1 + u3,1, g23 = p u2 + u3,2.
+    """
+    N, dxi, deta = shape_functions(xi, eta)
+    J = np.stack([np.einsum("eia,i->ea", X, dxi), np.einsum("eia,i->ea", X, deta)], axis=2)
+    det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
+    inv = np.stack([np.stack([J[:, 1, 1], -J[:, 0, 1]], 1), np.stack([-J[:, 1, 0], J[:, 0, 0]], 1)], 1) / det[:, None, None]
+    dN = np.stack([dxi, deta])  # (2, 4)
+    G = np.einsum("bi,eba->eia", dN, inv)  # dN_i / dx_a, (n, 4, 2)
+    n = len(X)
+    B = np.zeros((n, 6, 4, 3), dtype=G.dtype)
+    B[:, 0, :, 0] = G[:, :, 0]
+    B[:, 1, :, 1] = G[:, :, 1]
+    B[:, 3, :, 0], B[:, 3, :, 1] = G[:, :, 1], G[:, :, 0]
+    B[:, 4, :, 2], B[:, 5, :, 2] = G[:, :, 0], G[:, :, 1]
+    Nn = np.broadcast_to(N, (n, 4))
+    if body == RING:
+        inv_r = 1.0 / np.einsum("ei,i->e", X[:, :, 0], N)[:, None]
+        B[:, 2, :, 0] = Nn * inv_r
+        B[:, 2, :, 2] = p * Nn * inv_r
+        B[:, 4, :, 2] -= Nn * inv_r
+        B[:, 4, :, 0] = -p * Nn * inv_r
+        B[:, 5, :, 1] = -p * Nn * inv_r
+    else:
+        B[:, 2, :, 2] = -p * Nn
+        B[:, 4, :, 0] = p * Nn
+        B[:, 5, :, 1] = p * Nn
+    return B.reshape(n, 6, 12)
+
+
+def operators(X: np.ndarray, body: str) -> ElementOperators:
+    """Moment-scheme operators of all elements with nodal coordinates ``X`` (n, 4, 2)."""
+    R = local_frame(X)
+    T = strain_rotation(R)
+    parts = []
+    for p in (0.0, 1.0):
+        at = lambda xi, eta: np.einsum("ers,esk->erk", T, strain_operator(X, body, p, xi, eta))
+        parts.append((at(0.0, 0.0).real, at(1j * _STEP, 0.0).imag / _STEP, at(0.0, 1j * _STEP).imag / _STEP))
+    Ba = parts[0]
+    Bb = tuple(b1 - b0 for b1, b0 in zip(parts[1], parts[0]))
+    _, dxi, deta = shape_functions(0.0, 0.0)
+    J = np.stack([np.einsum("eia,i->ea", X, dxi), np.einsum("eia,i->ea", X, deta)], axis=2)
+    sqrt_g = np.abs(np.linalg.det(J))
+    if body == RING:
+        sqrt_g = sqrt_g * X[:, :, 0].mean(axis=1)
+    return ElementOperators(Ba, Bb, sqrt_g, R)
+
+
+def element_stiffness(ops: ElementOperators, p: float, D: np.ndarray) -> np.ndarray:
+    """Moment-scheme stiffness blocks ``(n, 12, 12)`` for wavenumber ``p``.
+
+    ``D`` is ``(n, 6, 6)`` per element, already weighted by the x3 integrals of the basis
+    products (see :func:`smfem.assembly.weighted_elasticity`).
+    """
+    B0, B1, B2 = ops.at(p)
+    k = np.einsum("eri,ers,esj->eij", B0, D, B0)
+    k += (np.einsum("eri,ers,esj->eij", B1, D, B1) + np.einsum("eri,ers,esj->eij", B2, D, B2)) / 12.0
+    return k * ops.sqrt_g[:, None, None]
+
+
+GAUSS_2 = np.array([-0.5, 0.5]) / np.sqrt(3.0)
+
+
+def element_stiffness_full(X: np.ndarray, body: str, p: float, D: np.ndarray) -> np.ndarray:
+    """Plain bilinear element with full 2 x 2 Gauss integration of every strain row.
+
+    Not used by the solver: it is the locking-prone baseline the moment scheme is compared with.
+    """
+    k = 0.0
+    for xi in GAUSS_2:
+        for eta in GAUSS_2:
+            N, dxi, deta = shape_functions(xi, eta)
+            J = np.stack([np.einsum("eia,i->ea", X, dxi), np.einsum("eia,i->ea", X, deta)], axis=2)
+            w = np.abs(np.linalg.det(J)) / 4.0
+            if body == RING:
+                w = w * np.einsum("ei,i->e", X[:, :, 0], N)
+            B = strain_operator(X, body, p, xi, eta)
+            k = k + np.einsum("eri,ers,esj->eij", B, D, B) * w[:, None, None]
+    return k

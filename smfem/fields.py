@@ -1,0 +1,47 @@
+"""The synthesized 3-D field: revolve (ring) or extrude (prism) the section mesh into hexahedra."""
+
+from __future__ import annotations
+
+import math
+
+import meshio
+import numpy as np
+
+from cases.geometry import RING
+
+from . import fourier
+
+
+def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None) -> meshio.Mesh:
+    """Hexahedral 3-D mesh with the synthesized displacement (cartesian) as point data.
+
+    Ring: ``n_x3`` sectors around the axis (default 72); prism: ``n_x3`` slices along the span
+    (default 60). Cartesian axes as in :mod:`cases.geometry`.
+    """
+    mesh, body = model.mesh, model.body
+    ring = body == RING
+    n_x3 = n_x3 or (72 if ring else 60)
+    x3 = np.linspace(0.0, 2 * math.pi if ring else model.length, n_x3 + (0 if ring else 1), endpoint=not ring)
+    u = np.zeros((len(x3), mesh.n_nodes, 3))
+    for s, amp in zip(model.systems, u_modes):
+        full = (s.T @ amp).reshape(-1, 3)
+        psi1, psi3 = fourier.psi(s.mode, x3, body, model.length)
+        u += np.einsum("k,nc->knc", psi1, full * [1, 1, 0]) + np.einsum("k,nc->knc", psi3, full * [0, 0, 1])
+    shape = (len(x3), mesh.n_nodes)
+    x1, x2 = np.broadcast_to(mesh.x[:, 0], shape), np.broadcast_to(mesh.x[:, 1], shape)
+    X3 = np.broadcast_to(x3[:, None], shape)
+    if ring:
+        c, s = np.cos(X3), np.sin(X3)
+        points = np.stack([x1 * c, x1 * s, x2], axis=-1)
+        disp = np.stack([u[..., 0] * c - u[..., 2] * s, u[..., 0] * s + u[..., 2] * c, u[..., 1]], axis=-1)
+        nxt = (np.arange(n_x3) + 1) % n_x3
+    else:
+        points = np.stack([X3, x1, x2], axis=-1)
+        disp = np.stack([u[..., 2], u[..., 0], u[..., 1]], axis=-1)
+        nxt = np.arange(1, len(x3))
+    here = np.arange(len(nxt))
+    n = mesh.n_nodes
+    e = mesh.elements
+    hexes = np.concatenate([e[None] + (here * n)[:, None, None], e[None] + (nxt * n)[:, None, None]], axis=2)
+    return meshio.Mesh(points.reshape(-1, 3), [("hexahedron", hexes.reshape(-1, 8))],
+                       point_data={"displacement": disp.reshape(-1, 3)})

@@ -1,0 +1,73 @@
+"""Loads and initial conditions as Fourier amplitudes of the mode basis."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cases.geometry import PRISM, RING, interval_fourier
+
+from .fourier import Mode, psi_squared_integrals
+from .mesh import SectionMesh
+
+
+def edge_pressure_vector(mesh: SectionMesh, edge: str, body: str) -> np.ndarray:
+    """Nodal forces (3 n_nodes,) of a unit pressure on ``edge``, per unit of the x3 integral.
+
+    Exact for a pressure normal to each straight segment and linear shape functions; for a ring
+    the surface element carries the radius: ``int N_i r ds = ds (2 r_i + r_j) / 6``.
+    """
+    seg, owner = mesh.edge_segments(edge)
+    xa, xb = mesh.x[seg[:, 0]], mesh.x[seg[:, 1]]
+    d = xb - xa
+    length = np.linalg.norm(d, axis=1)
+    normal = np.column_stack([d[:, 1], -d[:, 0]]) / length[:, None]
+    inward = mesh.x[mesh.elements[owner]].mean(axis=1) - 0.5 * (xa + xb)
+    normal *= np.sign(np.einsum("ea,ea->e", normal, inward))[:, None]  # pressure pushes inwards
+    if body == RING:
+        wa, wb = (2 * xa[:, 0] + xb[:, 0]) / 6, (xa[:, 0] + 2 * xb[:, 0]) / 6
+    else:
+        wa = wb = np.full(len(seg), 0.5)
+    f = np.zeros((mesh.n_nodes, 3))
+    np.add.at(f[:, :2], seg[:, 0], normal * (wa * length)[:, None])
+    np.add.at(f[:, :2], seg[:, 1], normal * (wb * length)[:, None])
+    return f.ravel()
+
+
+def pressure_x3_amplitude(load, mode: Mode, body: str, length: float) -> float:
+    """``int q(x3) psi1(x3) dx3`` of a pressure for one mode (exact)."""
+    if load.mode is not None:
+        return load.q * psi_squared_integrals(mode, body, length)[0] if mode.l == load.mode else 0.0
+    family = "sin" if (body == PRISM or mode.family == "s") else "cos"
+    return load.q * interval_fourier(load.x3_intervals, mode.l, family, body, length)
+
+
+def load_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode, np.ndarray]:
+    """Full nodal load amplitude (3 n_nodes,) of every mode."""
+    shapes = {load.edge: edge_pressure_vector(mesh, load.edge, case.body) for load in case.loads}
+    out = {}
+    for mode in modes:
+        Q = np.zeros(3 * mesh.n_nodes)
+        for load in case.loads:
+            Q += pressure_x3_amplitude(load, mode, case.body, case.length) * shapes[load.edge]
+        out[mode] = Q
+    return out
+
+
+def velocity_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode, np.ndarray]:
+    """Initial velocity amplitudes (3 n_nodes,): the projection of a uniform velocity."""
+    out = {}
+    for mode in modes:
+        V = np.zeros((mesh.n_nodes, 3))
+        for iv in case.initial_velocity:
+            c = iv.component - 1
+            which = 0 if c < 2 else 1
+            norm = psi_squared_integrals(mode, case.body, case.length)[which]
+            if norm == 0:
+                continue
+            fam = ("sin" if mode.family in "sp" else "cos") if c < 2 else ("cos" if mode.family in "sp" else "sin")
+            integral = interval_fourier(((0.0, case.length),), mode.l, fam, case.body, case.length)
+            if mode.family == "s" and c == 2:
+                integral = -integral  # u3 ~ -cos in the ring's sine family
+            V[:, c] += iv.value * integral / norm
+        out[mode] = V.ravel()
+    return out

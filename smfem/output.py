@@ -1,0 +1,55 @@
+"""Writing a run's files (CONTRACT.md): history.csv, summary.json, fields.vtu."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import __version__
+
+
+def summary(case, solver: str, result, wall_time_s: float) -> dict:
+    """The summary.json content of a run."""
+    its = np.asarray(result.iterations, float)
+    return {
+        "case": case.name,
+        "solver": solver,
+        "params": {k: v for k, v in case.params.items()},
+        "n_dof": int(result.n_dof),
+        "n_steps": len(result.iterations),
+        "wall_time_s": wall_time_s,
+        "cpu_time_s": result.cpu_time_s,
+        "iterations": {"mean": float(its.mean()) if its.size else 0.0, "max": int(its.max()) if its.size else 0},
+        "converged": bool(result.converged),
+        "message": result.message,
+        "harmonics_used": result.info.get("harmonics_used"),
+        "info": {k: v for k, v in result.info.items() if k != "harmonics_used"},
+        "version": __version__,
+    }
+
+
+def _jsonable(x):
+    if isinstance(x, float) and not math.isfinite(x):
+        return str(x)
+    if isinstance(x, dict):
+        return {k: _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.generic):
+        return x.item()
+    return x
+
+
+def write_run(out: Path, case, solver: str, result, wall_time_s: float) -> None:
+    """Write history.csv (one row per computed step, t = 0 included), summary.json, fields.vtu."""
+    out.mkdir(parents=True, exist_ok=True)
+    n = len(result.iterations) + 1
+    table = pd.DataFrame({"t": result.t[:n], **{k: v[:n] for k, v in result.history.items()}})
+    table.to_csv(out / "history.csv", index=False, float_format="%.10g")
+    (out / "summary.json").write_text(json.dumps(_jsonable(summary(case, solver, result, wall_time_s)), indent=2))
+    if result.mesh is not None:
+        result.mesh.write(out / "fields.vtu")

@@ -1,0 +1,95 @@
+"""Probes by harmonic synthesis (12): linear operators from mode amplitudes to probe values.
+
+Every probe that is linear in the displacements (or velocities) becomes one row per mode, so a
+probe history costs one sparse product per step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import element, fourier
+from .mesh import SectionMesh
+
+
+def locate(mesh: SectionMesh, point) -> tuple[int, float, float]:
+    """Element and local coordinates ``(xi, eta)`` in [-1/2, 1/2] of a section point.
+
+    Newton inversion of every element's bilinear map at once; the element whose local
+    coordinates lie inside (or least outside) is chosen.
+    """
+    X = mesh.element_x()
+    p = np.asarray(point, float)
+    xi = np.zeros((len(X), 2))
+    for _ in range(20):
+        N, dxi, deta = element.shape_functions(xi[:, 0], xi[:, 1])
+        x = np.einsum("ei,eia->ea", N, X)
+        J = np.stack([np.einsum("ei,eia->ea", dxi, X), np.einsum("ei,eia->ea", deta, X)], axis=2)
+        xi = np.clip(xi + np.linalg.solve(J, (p - x)[..., None])[..., 0], -2.0, 2.0)
+    outside = np.abs(xi).max(axis=1) - 0.5
+    e = int(np.argmin(np.where(np.isfinite(outside), outside, np.inf)))
+    if outside[e] > 1e-6:
+        raise ValueError(f"probe point {tuple(point)} lies outside the cross-section")
+    a, b = np.clip(xi[e], -0.5, 0.5)
+    return e, float(a), float(b)
+
+
+def stress_component_weights(R: np.ndarray, comp) -> np.ndarray:
+    """(6,) weights that turn local Voigt stresses into the global component ``comp`` (1-based).
+
+    ``R`` (2, 2) has rows t1, t2 of the local frame; sigma_global = Q' sigma_local Q with Q the
+    3-D rotation ``[[R, 0], [0, 1]]``.
+    """
+    Q = np.eye(3)
+    Q[:2, :2] = R
+    a, b = comp[0] - 1, comp[1] - 1
+    voigt = {(0, 0): 0, (1, 1): 1, (2, 2): 2, (0, 1): 3, (1, 0): 3, (0, 2): 4, (2, 0): 4, (1, 2): 5, (2, 1): 5}
+    w = np.zeros(6)
+    for i in range(3):
+        for j in range(3):
+            w[voigt[i, j]] += Q[i, a] * Q[j, b]
+    return w
+
+
+class ProbeSet:
+    """Linear probe operators of a model: ``values = sum_mode P[mode] @ u_mode`` (reduced)."""
+
+    def __init__(self, model, probes):
+        self.model = model
+        self.names = [p.name for p in probes]
+        self.fields = [p.field for p in probes]
+        rows = [self._rows(p) for p in probes]
+        self.operators = [
+            sp.csr_matrix(np.vstack([r[i] for r in rows]) @ s.T) for i, s in enumerate(model.systems)
+        ]
+
+    def _rows(self, probe) -> list[np.ndarray]:
+        """One full-dof row (3 n_nodes,) per mode."""
+        m = self.model
+        if probe.kind != "point" or probe.field not in ("u", "v", "sigma"):
+            raise ValueError(f"probe {probe.name!r} ({probe.kind} {probe.field}) is not available in the linear solver")
+        e, xi, eta = locate(m.mesh, probe.point[:2])
+        dofs = (3 * m.mesh.elements[e][:, None] + np.arange(3)).ravel()
+        out = []
+        for s in m.systems:
+            psi1, psi3 = fourier.psi(s.mode, probe.point[2], m.body, m.length)
+            row = np.zeros(3 * m.mesh.n_nodes)
+            if probe.field in ("u", "v"):
+                N, _, _ = element.shape_functions(xi, eta)
+                c = probe.component[0] - 1
+                row[dofs[c::3]] = N * (psi1 if c < 2 else psi3)
+            else:
+                p = fourier.wavenumber(s.mode, m.body, m.length)
+                B0, B1, B2 = (b[e] for b in m.ops.at(p))
+                eps = (B0 + xi * B1 + eta * B2) * np.where(fourier.ROW_TYPE == 0, psi1, psi3)[:, None]
+                w = stress_component_weights(m.ops.rotation[e], probe.component)
+                row[dofs] = w @ m.D @ eps
+            out.append(row)
+        return out
+
+    def evaluate(self, u: list[np.ndarray], v: list[np.ndarray]) -> np.ndarray:
+        """Probe values from reduced displacements and velocities per mode."""
+        total_u = sum(P @ x for P, x in zip(self.operators, u))
+        total_v = sum(P @ x for P, x in zip(self.operators, v))
+        return np.where(np.array([f == "v" for f in self.fields]), total_v, total_u)

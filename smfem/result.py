@@ -1,0 +1,35 @@
+"""What a run returns, whichever solver made it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import meshio
+import numpy as np
+
+
+@dataclass
+class RunResult:
+    """Histories and facts of one run.
+
+    Attributes
+    ----------
+    t : (n_steps + 1,) times including t = 0, s
+    history : probe name -> (n_steps + 1,) values
+    n_dof : unknowns actually solved for
+    iterations : per step (1 for a linear step)
+    converged : False if a step failed; ``message`` then names the step and time
+    cpu_time_s : process CPU time of the solve (model building and time stepping), s
+    mesh : synthesized 3-D field at the last computed step, or None
+    info : solver-specific facts (``harmonics_used``, factorizations, ...)
+    """
+
+    t: np.ndarray
+    history: dict[str, np.ndarray]
+    n_dof: int
+    iterations: list[int]
+    converged: bool = True
+    message: str = ""
+    cpu_time_s: float = 0.0
+    mesh: meshio.Mesh | None = None
+    info: dict = field(default_factory=dict)

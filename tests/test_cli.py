@@ -1,0 +1,85 @@
+"""The command line of CONTRACT.md."""
+
+import json
+import subprocess
+import sys
+
+import meshio
+import pandas as pd
+import pytest
+
+from cases import get_case
+from smfem.cli import main
+
+
+def test_run_thick_cylinder_writes_the_contract_files(tmp_path):
+    out = tmp_path / "run"
+    assert main(["run", "thick_cylinder", "--set", "dt=1e-5", "--out", str(out), "--quiet"]) == 0
+    history = pd.read_csv(out / "history.csv")
+    assert list(history.columns) == ["t", "A_ur", "B_ut", "C_ur"]
+    assert len(history) == 401 and history["t"].iloc[0] == 0 and history["t"].iloc[-1] == pytest.approx(4e-3)
+    summary = json.loads((out / "summary.json").read_text())
+    for key in ("case", "solver", "params", "n_dof", "n_steps", "wall_time_s", "cpu_time_s", "iterations",
+                "converged", "harmonics_used", "version"):
+        assert key in summary
+    assert summary["params"]["dt"] == 1e-5 and summary["n_steps"] == 400 and summary["converged"] is True
+    assert summary["iterations"] == {"mean": 1.0, "max": 1}
+    assert summary["harmonics_used"] == ["0c", "2c", "6c", "10c", "14c", "18c"]
+    mesh = meshio.read(out / "fields.vtu")
+    assert mesh.point_data["displacement"].shape == (len(mesh.points), 3)
+    assert mesh.cells[0].type == "hexahedron"
+
+
+def test_fields_carry_the_synthesized_probe_value(tmp_path):
+    """The 3-D field at point A (r2, theta = 0) equals the last A_ur of the history."""
+    main(["run", "thick_cylinder", "--out", str(tmp_path), "--quiet"])
+    mesh = meshio.read(tmp_path / "fields.vtu")
+    history = pd.read_csv(tmp_path / "history.csv")
+    import numpy as np
+
+    a = np.argmin(np.linalg.norm(mesh.points - [2.0, 0.0, 0.0], axis=1))
+    assert mesh.point_data["displacement"][a, 0] == pytest.approx(history["A_ur"].iloc[-1], rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["run", "no_such_case"], "unknown case"),
+        (["run", "dome", "--set", "nu=0.5"], "nu"),
+        (["run", "dome", "--set", "dt=inf"], "dt"),
+        (["run", "dome", "--set", "harmonics=0"], "harmonics"),
+        (["run", "dome", "--set", "bogus=1"], "bogus"),
+        (["run", "dome", "--set", "dt"], "KEY=VALUE"),
+        (["run", "dome", "--solver", "ansys"], "solver"),
+        (["frobnicate"], "invalid choice"),
+        (["run", "notched_cylinder"], "plastic"),
+    ],
+)
+def test_user_mistakes_exit_2_with_one_line_and_write_nothing(tmp_path, capsys, args, needle):
+    out = tmp_path / "out"
+    assert main(args + ["--out", str(out)] if args[0] == "run" else args) == 2
+    err = capsys.readouterr().err.strip()
+    assert needle in err and len(err.splitlines()) == 1 and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_unwritable_out_exits_2(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    assert main(["run", "dome", "--out", str(blocker / "sub")]) == 2
+    assert "--out" in capsys.readouterr().err
+
+
+def test_cases_lists_every_case_and_key(capsys):
+    assert main(["cases"]) == 0
+    text = capsys.readouterr().out
+    for name in ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact"):
+        assert name in text
+    assert "notch_depth" in text and "friction" in text
+
+
+def test_console_script_and_module_entry_point(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "smfem", "run", "dome", "--set", "t_end=1e-4",
+                           "--out", str(tmp_path), "--quiet"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert len(pd.read_csv(tmp_path / "history.csv")) == get_case("dome", {"t_end": 1e-4}).n_steps + 1
