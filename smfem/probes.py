@@ -60,9 +60,11 @@ class ProbeSet:
         self.names = [p.name for p in probes]
         self.fields = [p.field for p in probes]
         rows = [self._rows(p) for p in probes]
-        self.operators = [
-            sp.csr_matrix(np.vstack([r[i] for r in rows]) @ s.T) for i, s in enumerate(model.systems)
-        ]
+        per_mode = [np.vstack([r[i] for r in rows]) @ s.T for i, s in enumerate(model.systems)]
+        P = sp.csr_matrix(np.hstack(per_mode))  # acts on the amplitudes of all modes stacked
+        velocity = np.array([f == "v" for f in self.fields])
+        self.on_u = sp.csr_matrix(P.multiply(~velocity[:, None]))
+        self.on_v = sp.csr_matrix(P.multiply(velocity[:, None])) if velocity.any() else None
 
     def _rows(self, probe) -> list[np.ndarray]:
         """One full-dof row (3 n_nodes,) per mode."""
@@ -88,8 +90,7 @@ class ProbeSet:
             out.append(row)
         return out
 
-    def evaluate(self, u: list[np.ndarray], v: list[np.ndarray]) -> np.ndarray:
-        """Probe values from reduced displacements and velocities per mode."""
-        total_u = sum(P @ x for P, x in zip(self.operators, u))
-        total_v = sum(P @ x for P, x in zip(self.operators, v))
-        return np.where(np.array([f == "v" for f in self.fields]), total_v, total_u)
+    def evaluate(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Probe values from the stacked reduced displacements and velocities of all modes."""
+        values = self.on_u @ u
+        return values if self.on_v is None else values + self.on_v @ v

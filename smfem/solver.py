@@ -40,16 +40,15 @@ def solve(case, progress=None, with_fields: bool = True) -> RunResult:
     probes = ProbeSet(model, case.probes)
     K, M, Q, V0, offsets = stacked(model)
     stepper = LinearNewmark(K, M, Q, case.dt)
-    split = lambda x: np.split(x, offsets[1:-1])
     n = case.n_steps
     values = np.empty((n + 1, len(probes.names)))
     state = stepper.initial(np.zeros_like(Q), V0)
-    values[0] = probes.evaluate(split(state.u), split(state.v))
+    values[0] = probes.evaluate(state.u, state.v)
     for state in stepper.run(state, n):
-        values[state.n] = probes.evaluate(split(state.u), split(state.v))
+        values[state.n] = probes.evaluate(state.u, state.v)
         if progress:
             progress(state.n, n)
-    mesh = field_mesh(model, split(state.u)) if with_fields else None
+    mesh = field_mesh(model, np.split(state.u, offsets[1:-1])) if with_fields else None
     cpu = time.process_time() - cpu0
     return RunResult(
         t=np.arange(n + 1) * case.dt,
