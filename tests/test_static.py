@@ -3,6 +3,7 @@
 import dataclasses
 
 import numpy as np
+import scipy.sparse.linalg as sla
 import pytest
 
 from cases import get_case
@@ -87,3 +88,29 @@ def test_clamped_plate_does_not_lock_and_the_full_element_does():
             ratios[h, scheme] = -u[nearest_node(model, 0.0, 0.0), 1] / w0
     assert abs(ratios[1e-2, "moment"] - 1) < 0.03 and abs(ratios[1e-2, "moment"] - ratios[1e-1, "moment"]) < 2e-3
     assert ratios[1e-1, "full"] < 0.25 and ratios[1e-2, "full"] < 0.01
+
+
+def test_stress_probes_against_lame_and_the_exact_strip():
+    """Stress probes by synthesis: hoop stress in the cylinder, bending stress in the strip."""
+    from cases.geometry import Probe
+    from smfem.probes import ProbeSet
+
+    case = thick_cylinder_internal_pressure(1e6, nu=0.3, refine=2)
+    model, _ = static_solution(case)
+    s = model.systems[0]
+    u = sla.spsolve(s.K.tocsc(), s.Q)
+    r = 1.0 + 7.5 / 30  # an element centre: where the moment scheme's stresses are sharpest
+    probes = ProbeSet(model, [Probe("s_tt", "point", "sigma", (3, 3), point=(r, 0.0, 0.3)),
+                              Probe("s_rr", "point", "sigma", (1, 1), point=(r, 0.0, 0.3))])
+    exact = lame_cylinder(r, 1.0, 2.0, 1e6, 0.0, case.material.E, 0.3)
+    s_tt, s_rr = probes.evaluate(u, u)
+    assert s_tt == pytest.approx(exact["sigma_tt"], rel=2e-3)
+    assert s_rr == pytest.approx(exact["sigma_rr"], abs=2e-3 * exact["sigma_tt"])
+
+    model, _ = static_solution(strip_case(2))
+    s = model.systems[0]
+    u = sla.spsolve(s.K.tocsc(), s.Q)
+    z = 0.1 * (1 - 0.5 / 40)  # centre of the top element row
+    probes = ProbeSet(model, [Probe("s_span", "point", "sigma", (3, 3), point=(0.0025, z, 0.15))])
+    exact = hinged_strip_sine(0.15, z, 0.3, 0.1, 1e6, 2.1e11, 0.3)["sigma_xx"]
+    assert probes.evaluate(u, u)[0] == pytest.approx(exact, rel=5e-3)
