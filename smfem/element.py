@@ -130,15 +130,16 @@ def operators(X: np.ndarray, body: str) -> ElementOperators:
     return ElementOperators(Ba, Bb, sqrt_g, R)
 
 
-def element_stiffness(ops: ElementOperators, p: float, D: np.ndarray) -> np.ndarray:
-    """Moment-scheme stiffness blocks ``(n, 12, 12)`` for wavenumber ``p``.
+def element_stiffness(ops: ElementOperators, p: float, D: np.ndarray, q: float | None = None) -> np.ndarray:
+    """Moment-scheme stiffness blocks ``(n, 12, 12)`` coupling wavenumbers ``p`` (rows) and ``q``.
 
     ``D`` is ``(n, 6, 6)`` per element, already weighted by the x3 integrals of the basis
-    products (see :func:`smfem.assembly.weighted_elasticity`).
+    products (see :func:`smfem.assembly.weighted_elasticity`); ``q`` defaults to ``p``.
     """
-    B0, B1, B2 = ops.at(p)
-    k = np.einsum("eri,ers,esj->eij", B0, D, B0)
-    k += (np.einsum("eri,ers,esj->eij", B1, D, B1) + np.einsum("eri,ers,esj->eij", B2, D, B2)) / 12.0
+    L0, L1, L2 = ops.at(p)
+    R0, R1, R2 = (L0, L1, L2) if q is None or q == p else ops.at(q)
+    k = np.einsum("eri,ers,esj->eij", L0, D, R0)
+    k += (np.einsum("eri,ers,esj->eij", L1, D, R1) + np.einsum("eri,ers,esj->eij", L2, D, R2)) / 12.0
     return k * ops.sqrt_g[:, None, None]
 
 

@@ -1,8 +1,11 @@
 """The discrete SMFEM model of a case: mesh, element operators, per-mode matrices and loads.
 
-Built once per case and resolution; time stepping and statics only read it. For a body that is
-homogeneous along x3 the modes decouple, and only modes that carry a load or an initial
-velocity are kept (``modes``); ``candidates`` are all the modes the harmonics allow.
+Built once per case and resolution; time stepping and statics only read it.
+
+A body homogeneous along x3 has decoupled modes: only those that carry a load or an initial
+velocity are kept. Where the material varies along x3 (cut-outs) the modes couple through
+``D(lm)`` and ``rho(lm)``; then the modes kept are those the loaded ones reach through nonzero
+coupling, and ``coupling`` holds the off-diagonal blocks.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ import scipy.sparse as sp
 
 from cases.geometry import RING
 
-from . import assembly, constraints, element, fourier, loads
+from . import assembly, constraints, element, fourier, inhomogeneity, loads
 from .constitutive import isotropic_D
 from .mesh import SectionMesh, section_mesh
 
@@ -25,7 +28,8 @@ class ModelError(ValueError):
 
 @dataclass
 class ModeSystem:
-    """Reduced matrices of one decoupled mode: ``K``, lumped ``M`` diagonal, load ``Q``, map ``T``."""
+    """One mode: map ``T`` (full <- reduced), diagonal block ``K``, lumped ``M`` diagonal, load
+    ``Q`` and initial velocity ``V0`` (reduced)."""
 
     mode: fourier.Mode
     T: sp.csr_matrix
@@ -36,70 +40,104 @@ class ModeSystem:
 
 
 class Model:
-    """SMFEM model of ``case`` (homogeneous along x3: decoupled modes)."""
+    """SMFEM model of ``case``.
+
+    Parameters
+    ----------
+    refine, harmonics : override the case's values
+    scheme : ``'moment'`` (the solver's element) or ``'full'`` (fully integrated bilinear, for
+        comparison only)
+    """
 
     def __init__(self, case, refine: int | None = None, harmonics: int | None = None, scheme: str = "moment"):
-        if case.cutouts and case.contrast < 1.0:
-            raise ModelError(
-                f"{case.name}: material varying along x3 (cut-outs) couples the harmonics; "
-                "the coupled solver is not part of this version"
-            )
+        if scheme not in ("moment", "full"):
+            raise ModelError(f"unknown element scheme {scheme!r}: 'moment' or 'full'")
         self.case = case
         self.body = case.body
         self.length = case.length
         self.scheme = scheme
         self.mesh: SectionMesh = section_mesh(case.section, refine or case.refine)
-        X = self.mesh.element_x()
-        self.ops = element.operators(X, case.body)
+        self.ops = element.operators(self.mesh.element_x(), case.body)
         mat = case.material
         self.D = isotropic_D(mat.E, mat.nu)
         self.rho = mat.rho
+        self.inhomogeneous = bool(case.cutouts) and case.contrast < 1.0
+        n_harm = harmonics or case.harmonics
         families = ("c", "s") if case.body == RING else ("p",)
-        self.candidates = fourier.modes(case.body, harmonics or case.harmonics, families)
-        Q = loads.load_amplitudes(case, self.mesh, self.candidates)
-        V = loads.velocity_amplitudes(case, self.mesh, self.candidates)
-        scale = max([np.abs(q).max() for q in Q.values()] + [np.abs(v).max() for v in V.values()] + [0.0])
+        candidates = fourier.modes(case.body, n_harm, families)
+        Q = loads.load_amplitudes(case, self.mesh, candidates)
+        V = loads.velocity_amplitudes(case, self.mesh, candidates)
+        size = {m: max(np.abs(Q[m]).max(), np.abs(V[m]).max()) for m in candidates}
+        scale = max(size.values())
         if scale == 0.0:
             raise ModelError(f"{case.name}: no load and no initial velocity: nothing moves")
-        active = [m for m in self.candidates if max(np.abs(Q[m]).max(), np.abs(V[m]).max()) > 1e-12 * scale]
+        loaded = [i for i, m in enumerate(candidates) if size[m] > 1e-12 * scale]
+        if self.inhomogeneous:
+            self.x3, self.x3_weights = inhomogeneity.x3_quadrature(case, n_harm)
+            self.factor = inhomogeneity.element_factor(case, self.mesh, self.x3)
+            I = inhomogeneity.coupling_integrals(candidates, case, self.factor, self.x3, self.x3_weights)
+            # an isotropic D and the lumped mass pair psi1 with psi1 and psi3 with psi3 only
+            strength = np.maximum(np.abs(I[..., 0, 0]), np.abs(I[..., 1, 1])).max(axis=2)
+            active = self._reachable(loaded, strength)
+            self._integrals = {(i, j): I[a, b] for i, a in enumerate(active) for j, b in enumerate(active)}
+        else:
+            active = loaded
+            self._integrals = {(i, i): self._homogeneous_integrals(candidates[a]) for i, a in enumerate(active)}
+        self.modes = [candidates[a] for a in active]
         fixed = constraints.fixed_dofs(case, self.mesh)
-        self.systems = []
-        for mode in active:
+        self.systems: list[ModeSystem] = []
+        for i, mode in enumerate(self.modes):
             T = constraints.mode_map(case, self.mesh, mode, fixed)
-            if T.shape[1] == 0:
-                continue
-            K = (T.T @ self.full_stiffness(mode) @ T).tocsr()
-            M = T.multiply(T).T @ self.full_mass(mode)  # T'diag(m)T stays diagonal: T's columns do not overlap
+            K = (T.T @ self.full_stiffness(i, i) @ T).tocsr()
+            M = T.multiply(T).T @ self.full_mass(i, i)  # T'diag(m)T stays diagonal: T's columns do not overlap
             self.systems.append(ModeSystem(mode, T, K, M, T.T @ Q[mode], self._project(T, V[mode])))
-        self.modes = [s.mode for s in self.systems]
+        self.coupling: dict[tuple[int, int], tuple[sp.csr_matrix, sp.csr_matrix]] = {}
+        for (i, j) in self._integrals:
+            if i != j:
+                Ti, Tj = self.systems[i].T, self.systems[j].T
+                Mij = Ti.T @ sp.diags(self.full_mass(i, j)) @ Tj
+                self.coupling[i, j] = ((Ti.T @ self.full_stiffness(i, j) @ Tj).tocsr(), Mij.tocsr())
+
+    @staticmethod
+    def _reachable(loaded: list[int], strength: np.ndarray, tol: float = 1e-12) -> list[int]:
+        """Modes reached from the loaded ones through nonzero coupling (sorted)."""
+        linked = strength > tol * strength.max()
+        seen, todo = set(loaded), list(loaded)
+        while todo:
+            for j in np.flatnonzero(linked[todo.pop()]):
+                if j not in seen:
+                    seen.add(int(j))
+                    todo.append(int(j))
+        return sorted(seen)
 
     @staticmethod
     def _project(T: sp.csr_matrix, v: np.ndarray) -> np.ndarray:
         """Reduced coordinates of a full vector that lies in the range of ``T``."""
         return sp.linalg.lsqr(T, v, atol=1e-14, btol=1e-14)[0] if v.any() else np.zeros(T.shape[1])
 
-    def integrals(self, mode: fourier.Mode) -> np.ndarray:
-        """(n_elements, 2, 2) x3 integrals of basis products for a homogeneous body."""
+    def _homogeneous_integrals(self, mode: fourier.Mode) -> np.ndarray:
+        """(n_elements, 2, 2) exact x3 integrals of basis products of one mode."""
         i1, i3 = fourier.psi_squared_integrals(mode, self.body, self.length)
         out = np.zeros((self.mesh.n_elements, 2, 2))
         out[:, 0, 0], out[:, 1, 1] = i1, i3
         return out
 
-    def full_stiffness(self, mode: fourier.Mode) -> sp.csr_matrix:
-        """Unconstrained stiffness (3 n_nodes square) of one mode."""
-        Dw = assembly.weighted_elasticity(self.D, self.integrals(mode))
-        p = fourier.wavenumber(mode, self.body, self.length)
+    def full_stiffness(self, i: int, j: int) -> sp.csr_matrix:
+        """Unconstrained stiffness block (3 n_nodes square) coupling active modes ``i`` and ``j``."""
+        Dw = assembly.weighted_elasticity(self.D, self._integrals[i, j])
+        p = fourier.wavenumber(self.modes[i], self.body, self.length)
+        q = fourier.wavenumber(self.modes[j], self.body, self.length)
         if self.scheme == "moment":
-            blocks = element.element_stiffness(self.ops, p, Dw)
-        elif self.scheme == "full":
-            blocks = element.element_stiffness_full(self.mesh.element_x(), self.body, p, Dw)
+            blocks = element.element_stiffness(self.ops, p, Dw, q)
         else:
-            raise ModelError(f"unknown element scheme {self.scheme!r}: 'moment' or 'full'")
+            if i != j:
+                raise ModelError("the fully integrated comparison element is for decoupled modes only")
+            blocks = element.element_stiffness_full(self.mesh.element_x(), self.body, p, Dw)
         return assembly.assemble(blocks, self.mesh.elements, self.mesh.n_nodes)
 
-    def full_mass(self, mode: fourier.Mode) -> np.ndarray:
-        """Unconstrained lumped mass diagonal (3 n_nodes,) of one mode."""
-        I = self.integrals(mode)
+    def full_mass(self, i: int, j: int) -> np.ndarray:
+        """Unconstrained lumped mass diagonal (3 n_nodes,) of block ``(i, j)``."""
+        I = self._integrals[i, j]
         rho_int = self.rho * np.stack([I[:, 0, 0], I[:, 1, 1]], axis=1)
         return assembly.lumped_mass(self.ops.sqrt_g, rho_int, self.mesh.elements, self.mesh.n_nodes)
 

@@ -27,32 +27,38 @@ class State:
 
 
 class LinearNewmark:
-    """Average-acceleration Newmark for ``M a + K u = Q`` with diagonal ``M``.
+    """Average-acceleration Newmark for ``M a + K u = Q``.
 
     Parameters
     ----------
-    K : (n, n) sparse stiffness; M : (n,) lumped mass diagonal; Q : (n,) load held from t = 0
+    K : (n, n) sparse stiffness
+    M : (n,) lumped mass diagonal, or (n, n) sparse mass where harmonics couple through rho(lm)
+    Q : (n,) load held from t = 0
     dt : time step, s
     """
 
-    def __init__(self, K: sp.spmatrix, M: np.ndarray, Q: np.ndarray, dt: float):
-        self.K, self.M, self.Q = K.tocsr(), M, Q
+    def __init__(self, K: sp.spmatrix, M, Q: np.ndarray, dt: float):
+        self.K, self.Q = K.tocsr(), Q
         self.c = newmark_constants(dt)
-        self.a0M = self.c.a0 * M
-        self.lu = sla.splu((self.K + sp.diags(self.a0M)).tocsc())
+        self.diagonal_mass = isinstance(M, np.ndarray) and M.ndim == 1
+        self.M = M if self.diagonal_mass else sp.csr_matrix(M)
+        self.a0M = self.c.a0 * self.M
+        self.lu = sla.splu((self.K + (sp.diags(self.a0M) if self.diagonal_mass else self.a0M)).tocsc())
         self.factorizations = 1
         # a0 u + a2 v + a3 a = a0 (u + b1 v + b2 a): the same right-hand side in fewer operations
         self.b1, self.b2 = self.c.a2 / self.c.a0, self.c.a3 / self.c.a0
 
     def initial(self, u0: np.ndarray, v0: np.ndarray) -> State:
         """State at t = 0 with ``M a0 = Q - K u0`` (the load is on at t = 0)."""
-        return State(0, u0.copy(), v0.copy(), (self.Q - self.K @ u0) / self.M)
+        force = self.Q - self.K @ u0
+        a = force / self.M if self.diagonal_mass else sla.spsolve(self.M.tocsc(), force)
+        return State(0, u0.copy(), v0.copy(), a)
 
     def step(self, s: State) -> State:
         """One step of (9)-(11): ``(K + a0 M) u = Q + M (a0 u + a2 v + a3 a)`` and the updates."""
         c = self.c
         predicted = s.u + self.b1 * s.v + self.b2 * s.a
-        u = self.lu.solve(self.Q + self.a0M * predicted)
+        u = self.lu.solve(self.Q + (self.a0M * predicted if self.diagonal_mass else self.a0M @ predicted))
         a = c.a0 * (u - predicted)  # = a0 (u - u_t) - a2 v - a3 a
         return State(s.n + 1, u, s.v + c.a6 * s.a + c.a7 * a, a)
 
@@ -64,4 +70,5 @@ class LinearNewmark:
 
     def energy(self, s: State) -> tuple[float, float]:
         """Kinetic and strain energy ``(v'Mv/2, u'Ku/2)``."""
-        return 0.5 * s.v @ (self.M * s.v), 0.5 * s.u @ (self.K @ s.u)
+        Mv = self.M * s.v if self.diagonal_mass else self.M @ s.v
+        return 0.5 * s.v @ Mv, 0.5 * s.u @ (self.K @ s.u)

@@ -15,11 +15,22 @@ from .result import RunResult
 
 
 def stacked(model: Model):
-    """Block-diagonal ``K``, stacked ``M``, ``Q``, ``V0`` of all modes, and the split offsets."""
+    """``K``, ``M``, ``Q``, ``V0`` of all modes stacked, and the offsets of each mode.
+
+    Decoupled modes give a block-diagonal ``K`` and a mass diagonal; coupled ones (material
+    varying along x3) the whole block system with the mass as a sparse matrix.
+    """
     S = model.systems
-    K = sp.block_diag([s.K for s in S], format="csr")
     offsets = np.cumsum([0] + [s.K.shape[0] for s in S])
-    return K, np.concatenate([s.M for s in S]), np.concatenate([s.Q for s in S]), np.concatenate([s.V0 for s in S]), offsets
+    Q, V0 = np.concatenate([s.Q for s in S]), np.concatenate([s.V0 for s in S])
+    if not model.coupling:
+        return sp.block_diag([s.K for s in S], format="csr"), np.concatenate([s.M for s in S]), Q, V0, offsets
+    n = len(S)
+    Kb = [[model.coupling[i, j][0] if (i, j) in model.coupling else None for j in range(n)] for i in range(n)]
+    Mb = [[model.coupling[i, j][1] if (i, j) in model.coupling else None for j in range(n)] for i in range(n)]
+    for i, s in enumerate(S):
+        Kb[i][i], Mb[i][i] = s.K, sp.diags(s.M)
+    return sp.bmat(Kb, format="csr"), sp.bmat(Mb, format="csr"), Q, V0, offsets
 
 
 def solve(case, progress=None, with_fields: bool = True) -> RunResult:
@@ -58,5 +69,7 @@ def solve(case, progress=None, with_fields: bool = True) -> RunResult:
         cpu_time_s=cpu,
         mesh=mesh,
         info={"harmonics_used": model.harmonics_used(), "factorizations": stepper.factorizations,
-              "n_elements": model.mesh.n_elements, "solve": "decoupled harmonics, one block-diagonal factorization"},
+              "n_elements": model.mesh.n_elements,
+              "solve": "direct: the coupled block system, one factorization" if model.coupling
+              else "decoupled harmonics, one block-diagonal factorization"},
     )
