@@ -17,7 +17,7 @@ import scipy.sparse as sp
 
 from cases.geometry import RING
 
-from . import assembly, constraints, element, fourier, inhomogeneity, loads
+from . import assembly, constraints, element, fourier, inhomogeneity, loads, symmetry
 from .constitutive import isotropic_D
 from .mesh import SectionMesh, section_mesh
 
@@ -47,9 +47,14 @@ class Model:
     refine, harmonics : override the case's values
     scheme : ``'moment'`` (the solver's element) or ``'full'`` (fully integrated bilinear, for
         comparison only)
+    nonlinear : keep every mode the symmetry of the problem allows (plasticity couples them) and
+        set up the x3 sample points for stresses
+    coupled_stiffness : assemble the off-diagonal stiffness blocks (a direct solve needs them;
+        the block-iterative solver takes the coupling from the stresses instead)
     """
 
-    def __init__(self, case, refine: int | None = None, harmonics: int | None = None, scheme: str = "moment"):
+    def __init__(self, case, refine: int | None = None, harmonics: int | None = None, scheme: str = "moment",
+                 nonlinear: bool = False, coupled_stiffness: bool = True):
         if scheme not in ("moment", "full"):
             raise ModelError(f"unknown element scheme {scheme!r}: 'moment' or 'full'")
         self.case = case
@@ -72,16 +77,22 @@ class Model:
         if scale == 0.0:
             raise ModelError(f"{case.name}: no load and no initial velocity: nothing moves")
         loaded = [i for i, m in enumerate(candidates) if size[m] > 1e-12 * scale]
-        if self.inhomogeneous:
+        self.nonlinear = nonlinear
+        if self.inhomogeneous or nonlinear:
             self.x3, self.x3_weights = inhomogeneity.x3_quadrature(case, n_harm)
             self.factor = inhomogeneity.element_factor(case, self.mesh, self.x3)
+        if nonlinear:
+            allowed = set(symmetry.nonlinear_modes(case, candidates))
+            active = [i for i, m in enumerate(candidates) if m in allowed]
+        if self.inhomogeneous:
             I = inhomogeneity.coupling_integrals(candidates, case, self.factor, self.x3, self.x3_weights)
-            # an isotropic D and the lumped mass pair psi1 with psi1 and psi3 with psi3 only
-            strength = np.maximum(np.abs(I[..., 0, 0]), np.abs(I[..., 1, 1])).max(axis=2)
-            active = self._reachable(loaded, strength)
+            if not nonlinear:
+                # an isotropic D and the lumped mass pair psi1 with psi1 and psi3 with psi3 only
+                strength = np.maximum(np.abs(I[..., 0, 0]), np.abs(I[..., 1, 1])).max(axis=2)
+                active = self._reachable(loaded, strength)
             self._integrals = {(i, j): I[a, b] for i, a in enumerate(active) for j, b in enumerate(active)}
         else:
-            active = loaded
+            active = active if nonlinear else loaded
             self._integrals = {(i, i): self._homogeneous_integrals(candidates[a]) for i, a in enumerate(active)}
         self.modes = [candidates[a] for a in active]
         fixed = constraints.fixed_dofs(case, self.mesh)
@@ -95,8 +106,9 @@ class Model:
         for (i, j) in self._integrals:
             if i != j:
                 Ti, Tj = self.systems[i].T, self.systems[j].T
-                Mij = Ti.T @ sp.diags(self.full_mass(i, j)) @ Tj
-                self.coupling[i, j] = ((Ti.T @ self.full_stiffness(i, j) @ Tj).tocsr(), Mij.tocsr())
+                Mij = (Ti.T @ sp.diags(self.full_mass(i, j)) @ Tj).tocsr()
+                Kij = (Ti.T @ self.full_stiffness(i, j) @ Tj).tocsr() if coupled_stiffness else None
+                self.coupling[i, j] = (Kij, Mij)
 
     @staticmethod
     def _reachable(loaded: list[int], strength: np.ndarray, tol: float = 1e-12) -> list[int]:

@@ -52,6 +52,43 @@ def stress_component_weights(R: np.ndarray, comp) -> np.ndarray:
     return w
 
 
+class PlasticStrainProbes:
+    """Equivalent plastic strain probes from the sample points (Gauss points x x3 points).
+
+    A point probe interpolates bilinearly between the element's four Gauss points and linearly
+    between the two nearest x3 points; ``max`` is the maximum over every sample point.
+    """
+
+    def __init__(self, model, probes):
+        from .sampling import GAUSS_A, GAUSS_ETA, GAUSS_XI
+
+        self.names = [p.name for p in probes]
+        self.targets = []
+        period = 2 * np.pi if model.body == "ring" else model.length
+        for p in probes:
+            if p.kind == "max":
+                self.targets.append(None)
+                continue
+            e, xi, eta = locate(model.mesh, p.point[:2])
+            wg = (1 + GAUSS_XI * xi / GAUSS_A**2) * (1 + GAUSS_ETA * eta / GAUSS_A**2) / 4
+            x3 = model.x3
+            x = p.point[2] % period if model.body == "ring" else p.point[2]
+            k = int(np.clip(np.searchsorted(x3, x), 1, len(x3) - 1))
+            lam = float(np.clip((x - x3[k - 1]) / (x3[k] - x3[k - 1]), 0.0, 1.0))
+            self.targets.append((e, wg, k, lam))
+
+    def evaluate(self, peps: np.ndarray) -> np.ndarray:
+        """Probe values from the plastic strain at the points (n_elements, 4, n_x3)."""
+        out = []
+        for target in self.targets:
+            if target is None:
+                out.append(peps.max())
+                continue
+            e, wg, k, lam = target
+            out.append(wg @ ((1 - lam) * peps[e, :, k - 1] + lam * peps[e, :, k]))
+        return np.array(out)
+
+
 class ProbeSet:
     """Linear probe operators of a model: ``values = sum_mode P[mode] @ u_mode`` (reduced)."""
 

@@ -1,4 +1,14 @@
-"""Run a case with SMFEM: build the model, step in time, record probes."""
+"""Run a case with SMFEM: build the model, step in time, record probes.
+
+The solver chooses how to solve each step and names the choice in ``info['solve']``:
+* elastic, homogeneous along x3: decoupled harmonics, one block-diagonal factorization;
+* elastic, material varying along x3: a direct solve of the whole coupled block system if it
+  has at most ``DIRECT_MAX_NONZEROS`` nonzeros, else the block-iterative algorithm;
+* elasto-plastic: the iterations (13)-(16) of additional loads with Wilkins' correction; the
+  iteration matrix is the whole coupled elastic system where the material varies along x3 and
+  it fits (block SOR converges slowly when cut-outs couple the harmonics strongly), else the
+  paper's block SOR over the harmonics with the diagonal blocks factorized once.
+"""
 
 from __future__ import annotations
 
@@ -8,10 +18,18 @@ import numpy as np
 import scipy.sparse as sp
 
 from .fields import field_mesh
+from .iterative import BlockIterative, NotConverged
 from .model import Model, ModelError
 from .newmark import LinearNewmark
-from .probes import ProbeSet
+from .probes import PlasticStrainProbes, ProbeSet
 from .result import RunResult
+
+#: the largest coupled system factorized directly (nonzeros of K + a0 M)
+DIRECT_MAX_NONZEROS = 4_000_000
+#: relaxation of the block SOR (see the omega study in benchmarks/)
+OMEGA = 1.0
+#: iterations allowed per step before a run stops as not converged
+MAX_ITERATIONS = 200
 
 
 def stacked(model: Model):
@@ -33,21 +51,44 @@ def stacked(model: Model):
     return sp.bmat(Kb, format="csr"), sp.bmat(Mb, format="csr"), Q, V0, offsets
 
 
-def solve(case, progress=None, with_fields: bool = True) -> RunResult:
-    """Linear elastic dynamics of a case homogeneous along x3.
+def coupled_nonzeros(model: Model) -> int:
+    """Nonzeros the direct solve of the coupled system would factorize (before fill-in)."""
+    return sum(s.K.nnz for s in model.systems) + sum(k.nnz for k, _ in model.coupling.values() if k is not None)
+
+
+def solve(case, progress=None, with_fields: bool = True, direct: bool | None = None) -> RunResult:
+    """Transient SMFEM run of a case.
 
     Parameters
     ----------
     case : cases.Case
     progress : optional callable ``(step, n_steps)``
-    with_fields : also synthesize the 3-D field at the final time
+    with_fields : also synthesize the 3-D field at the last computed step
+    direct : force (True) or forbid (False) the direct coupled solve of an elastic
+        inhomogeneous case; None lets the solver choose by size
     """
-    if case.material.plastic:
-        raise ModelError(f"{case.name}: the elasto-plastic solver is not part of this version; use --set plastic=false")
     if case.wall is not None:
         raise ModelError(f"{case.name}: contact is not part of this version")
     cpu0 = time.process_time()
-    model = Model(case)
+    plastic = case.material.plastic
+    model = Model(case, nonlinear=plastic)
+    fits = bool(model.coupling) and coupled_nonzeros(model) <= DIRECT_MAX_NONZEROS
+    use_direct = fits if direct is None else (direct and bool(model.coupling))
+    if not plastic and not (model.coupling and not use_direct):
+        return _linear(case, model, progress, with_fields, cpu0)
+    if not plastic:  # elastic but too large to factorize whole: the iterative path
+        model = Model(case, nonlinear=True, coupled_stiffness=False)
+    return _iterative(case, model, progress, with_fields, cpu0, use_direct and bool(model.coupling))
+
+
+def _history(case, linear_names, linear_values, plastic_names=(), plastic_values=None):
+    columns = dict(zip(linear_names, linear_values.T))
+    if plastic_values is not None:
+        columns.update(zip(plastic_names, plastic_values.T))
+    return {name: columns[name] for name in case.probe_names}
+
+
+def _linear(case, model, progress, with_fields, cpu0) -> RunResult:
     probes = ProbeSet(model, case.probes)
     K, M, Q, V0, offsets = stacked(model)
     stepper = LinearNewmark(K, M, Q, case.dt)
@@ -60,16 +101,53 @@ def solve(case, progress=None, with_fields: bool = True) -> RunResult:
         if progress:
             progress(state.n, n)
     mesh = field_mesh(model, np.split(state.u, offsets[1:-1])) if with_fields else None
-    cpu = time.process_time() - cpu0
     return RunResult(
-        t=np.arange(n + 1) * case.dt,
-        history=dict(zip(probes.names, values.T)),
-        n_dof=model.n_dof,
-        iterations=[1] * n,
-        cpu_time_s=cpu,
-        mesh=mesh,
+        t=np.arange(n + 1) * case.dt, history=_history(case, probes.names, values), n_dof=model.n_dof,
+        iterations=[1] * n, cpu_time_s=time.process_time() - cpu0, mesh=mesh,
         info={"harmonics_used": model.harmonics_used(), "factorizations": stepper.factorizations,
               "n_elements": model.mesh.n_elements,
               "solve": "direct: the coupled block system, one factorization" if model.coupling
               else "decoupled harmonics, one block-diagonal factorization"},
+    )
+
+
+def _iterative(case, model, progress, with_fields, cpu0, direct: bool) -> RunResult:
+    linear = [p for p in case.probes if p.field != "peps"]
+    plastic = [p for p in case.probes if p.field == "peps"]
+    probes, pprobes = ProbeSet(model, linear), PlasticStrainProbes(model, plastic)
+    coupled = stacked(model)[:2] if direct else None
+    solver = BlockIterative(model, case.dt, omega=OMEGA, tol=case.params["tol"], max_iter=MAX_ITERATIONS,
+                            coupled=coupled)
+    n = case.n_steps
+    values, pvalues = np.empty((n + 1, len(linear))), np.empty((n + 1, len(plastic)))
+    zero = [np.zeros_like(s.Q) for s in model.systems]
+    u, v, a = solver.initial(zero, [s.V0 for s in model.systems])
+    record = lambda k: (values.__setitem__(k, probes.evaluate(np.concatenate(u), np.concatenate(v))),
+                        pvalues.__setitem__(k, pprobes.evaluate(solver.state.peps)))
+    record(0)
+    iterations, message = [], ""
+    for k in range(1, n + 1):
+        try:
+            u, v, a, its = solver.step(u, v, a, k, k * case.dt)
+        except NotConverged as exc:
+            message = str(exc)
+            break
+        iterations.append(its)
+        record(k)
+        if progress:
+            progress(k, n)
+    done = len(iterations) + 1
+    mesh = field_mesh(model, u, peps=solver.state.peps) if with_fields else None
+    its = np.array(iterations or [0])
+    return RunResult(
+        t=np.arange(done) * case.dt,
+        history={k: h[:done] for k, h in _history(case, probes.names, values, pprobes.names, pvalues).items()},
+        n_dof=model.n_dof, iterations=iterations, converged=not message, message=message,
+        cpu_time_s=time.process_time() - cpu0, mesh=mesh,
+        info={"harmonics_used": model.harmonics_used(), "factorizations": solver.factorizations,
+              "n_elements": model.mesh.n_elements, "n_x3_points": len(model.x3),
+              "solve": "iterative (13)-(16) with the whole coupled elastic system as iteration matrix" if direct
+              else f"block-iterative (13)-(16): block SOR over {len(model.systems)} harmonics, omega {OMEGA:g}",
+              "iterations_mean": float(its.mean()), "iterations_max": int(its.max()),
+              "time_breakdown_s": dict(solver.timings)},
     )

@@ -52,7 +52,6 @@ def test_fields_carry_the_synthesized_probe_value(tmp_path):
         (["run", "dome", "--set", "dt"], "KEY=VALUE"),
         (["run", "dome", "--solver", "ansys"], "solver"),
         (["frobnicate"], "invalid choice"),
-        (["run", "notched_cylinder"], "plastic"),
     ],
 )
 def test_user_mistakes_exit_2_with_one_line_and_write_nothing(tmp_path, capsys, args, needle):

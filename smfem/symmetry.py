@@ -1,0 +1,57 @@
+"""Which harmonics a nonlinear run needs: the symmetry of loads and material along x3.
+
+Plasticity couples every pair of harmonics that the symmetry of the problem allows, so the
+modes of a nonlinear run follow from that symmetry, not from the load alone:
+* ring: reflection about theta = 0 removes the sine family; a rotational period 2 pi / n keeps
+  only harmonics that are multiples of n (n = 0: axisymmetric, harmonic 0 only);
+* prism: reflection about mid-span keeps the odd harmonics only.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cases.geometry import RING
+
+from .fourier import Mode
+
+
+def x3_pattern(case, x3: np.ndarray) -> np.ndarray:
+    """A function of x3 that shares every symmetry of the loads, velocities and cut-outs."""
+    period = 2 * math.pi if case.body == RING else case.length
+    out = np.zeros_like(x3)
+    weights = iter(math.sqrt(k + 2) for k in range(1000))  # incommensurate: no accidental cancelling
+    for load in case.loads:
+        if load.mode is not None:
+            k = load.mode if case.body == RING else load.mode * math.pi / case.length
+            out += next(weights) * (np.cos(k * x3) if case.body == RING else np.sin(k * x3))
+            continue
+        inside = np.zeros_like(x3, bool)
+        for a, b in load.x3_intervals:
+            inside |= ((x3 - a) % period < (b - a)) if case.body == RING else ((x3 > a) & (x3 < b))
+        out += next(weights) * inside
+    for cut in case.cutouts:
+        inside = np.zeros_like(x3, bool)
+        for a, b in cut.x3_intervals:
+            inside |= ((x3 - a) % period < (b - a)) if case.body == RING else ((x3 > a) & (x3 < b))
+        out += next(weights) * inside
+    return out
+
+
+def nonlinear_modes(case, candidates: list[Mode]) -> list[Mode]:
+    """The candidate modes that the symmetry of the problem allows."""
+    period = 2 * math.pi if case.body == RING else case.length
+    x = (np.arange(4096) + 0.5 * math.sqrt(2) - 0.5) * period / 4096  # off every interval edge
+    g = x3_pattern(case, x)
+    same = lambda h: np.allclose(g, h, atol=1e-12 * (1 + np.abs(g).max()))
+    if case.body != RING:
+        return [m for m in candidates if m.l % 2 == 1] if same(x3_pattern(case, period - x)) else candidates
+    families = ("c",) if same(x3_pattern(case, -x)) else ("c", "s")
+    if same(np.full_like(g, g.mean())):
+        n = 0
+    else:
+        n = max(k for k in range(1, 257) if same(x3_pattern(case, x + period / k)))
+    keep = lambda m: (m.l == 0) if n == 0 else (m.l % n == 0)
+    return [m for m in candidates if m.family in families and keep(m)]

@@ -1,0 +1,98 @@
+"""Wilkins plasticity and the block-iterative solver."""
+
+import math
+
+import numpy as np
+import pytest
+
+from cases import get_case
+from cases.material import lame
+from smfem.plasticity import shear_intensity, wilkins
+from smfem.solver import solve
+
+
+def uniaxial_strain_path(E, nu, sigma_y, E_T, strains):
+    """Drive one point through uniaxial strain increments; return sigma_11 and peps."""
+    lam, mu = lame(E, nu)
+    H = E * E_T / (E - E_T) if E_T else 0.0
+    D = np.zeros((6, 6))
+    D[:3, :3] = lam
+    D[[0, 1, 2], [0, 1, 2]] += 2 * mu
+    D[[3, 4, 5], [3, 4, 5]] = mu
+    sigma, peps, out = np.zeros(6), np.array(0.0), []
+    prev = 0.0
+    for e in strains:
+        d = np.zeros(6)
+        d[0] = e - prev
+        prev = e
+        sigma, peps, _ = wilkins(sigma + D @ d, peps, np.array(mu), sigma_y, H)
+        out.append((sigma[0], sigma[1], float(peps)))
+    return np.array(out), lam, mu, H
+
+
+@pytest.mark.parametrize("E_T", [0.0, 0.21e6])
+def test_uniaxial_strain_follows_the_hardening_law_exactly(E_T):
+    """In uniaxial strain the stress difference follows the yield stress,
+    sigma_11 - sigma_22 = sigma_y0 + H peps, with peps = (2/3)(eps - eps_y) 3 mu / (3 mu + H)."""
+    E, nu, sy = 10.5e6, 0.3, 24000.0
+    strains = np.linspace(0, 0.02, 201)[1:]
+    path, lam, mu, H = uniaxial_strain_path(E, nu, sy, E_T, strains)
+    s11, s22, peps = path.T
+    eps_y = sy / (2 * mu)  # sigma_11 - sigma_22 = 2 mu eps in the elastic range
+    plastic = strains > eps_y
+    assert np.all(peps[~plastic] == 0)
+    assert np.allclose((s11 - s22)[plastic], sy + H * peps[plastic], rtol=1e-12)
+    expected = (2 / 3) * (strains[plastic] - eps_y) * 3 * mu / (3 * mu + H)
+    assert np.allclose(peps[plastic], expected, rtol=1e-10)
+    voigt = np.column_stack([s11, s22, s22, 0 * s11, 0 * s11, 0 * s11])  # uniaxial strain: s33 = s22
+    assert np.allclose(math.sqrt(3) * shear_intensity(voigt)[plastic], sy + H * peps[plastic], rtol=1e-12)
+
+
+def test_wilkins_leaves_the_mean_stress_and_elastic_points_alone():
+    rng = np.random.default_rng(2)
+    trial = rng.normal(size=(50, 6)) * 1.2e8
+    sigma, peps, yielding = wilkins(trial, np.zeros(50), np.full(50, 8e10), 2.9e8, 0.0)
+    assert np.allclose(sigma[:, :3].mean(1), trial[:, :3].mean(1))
+    assert np.allclose(sigma[~yielding], trial[~yielding])
+    assert np.allclose(math.sqrt(3) * shear_intensity(sigma[yielding]), 2.9e8)
+    assert np.all(peps[yielding] > 0) and yielding.any() and (~yielding).any()
+
+
+@pytest.mark.parametrize("name,keys", [("thick_cylinder", {"q": 1e6}), ("notched_cylinder", {"q": 1e6})])
+def test_iterative_path_reproduces_the_linear_solver_below_yield(name, keys):
+    """A plastic run whose load never reaches yield is the elastic run: the iterative solver
+    (more harmonics, sample points, Wilkins) against the direct linear one."""
+    t_end = 2e-3 if name == "thick_cylinder" else 6e-3
+    plastic = solve(get_case(name, {"plastic": True, "t_end": t_end, **keys}), with_fields=False)
+    elastic = solve(get_case(name, {"plastic": False, "t_end": t_end, **keys}), with_fields=False)
+    assert plastic.converged and max(plastic.history["peps_max"]) == 0
+    for probe, h in elastic.history.items():
+        assert np.abs(plastic.history[probe] - h).max() < 1e-4 * np.abs(h).max(), probe
+
+
+def test_plastic_thick_cylinder_yields_and_converges_in_few_iterations():
+    result = solve(get_case("thick_cylinder", {"plastic": True}), with_fields=False)
+    assert result.converged and len(result.iterations) == 100
+    assert result.info["iterations_max"] <= 8 and result.info["iterations_mean"] < 4
+    peps_A, peps_max = result.history["peps_A"], result.history["peps_max"]
+    assert peps_max.max() > 1e-3 and np.all(np.diff(peps_max) >= -1e-15)  # accumulates, never drops
+    assert 0 < peps_A.max() <= peps_max.max()
+    assert result.info["harmonics_used"] == [f"{l}c" for l in range(0, 20, 2)]
+
+
+def test_not_converged_step_is_reported_with_the_history_kept(monkeypatch):
+    monkeypatch.setattr("smfem.solver.MAX_ITERATIONS", 2)
+    result = solve(get_case("thick_cylinder", {"plastic": True}), with_fields=False)
+    assert not result.converged and "did not converge" in result.message and "t = " in result.message
+    assert len(result.history["A_ur"]) == len(result.iterations) + 1 and 0 < len(result.iterations) < 100
+
+
+def test_cli_exit_3_when_a_step_does_not_converge(monkeypatch, tmp_path, capsys):
+    import pandas as pd
+
+    from smfem.cli import main
+
+    monkeypatch.setattr("smfem.solver.MAX_ITERATIONS", 2)
+    assert main(["run", "thick_cylinder", "--set", "plastic=true", "--out", str(tmp_path), "--quiet"]) == 3
+    assert "did not converge" in capsys.readouterr().err
+    assert 1 < len(pd.read_csv(tmp_path / "history.csv")) < 101
