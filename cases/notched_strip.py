@@ -56,5 +56,5 @@ def build(p: dict) -> Case:
         probes=tuple(probes), params=p,
         cutouts=(Cutout((0.0, dz), (0.0, d), (NOTCH_X3,)),) if d > 0 else (),
         contrast=p["contrast"], provenance=PROVENANCE,
-        references={"plastic_hinge_times": (0.96e-4, 3.2e-4)},
+        references={"plastic_zone_times": (0.96e-4, 3.2e-4)},  # the plastic hinge forming
     )

@@ -53,3 +53,7 @@ def write_run(out: Path, case, solver: str, result, wall_time_s: float) -> None:
     (out / "summary.json").write_text(json.dumps(_jsonable(summary(case, solver, result, wall_time_s)), indent=2))
     if result.mesh is not None:
         result.mesh.write(out / "fields.vtu")
+    if getattr(result, "snapshots", None):
+        from .plots import plastic_zones
+
+        plastic_zones(result.snapshots, out / "plastic_zones.png", f"{case.name} ({solver}): plastic zones")

@@ -22,6 +22,7 @@ class RunResult:
     cpu_time_s : process CPU time of the solve (model building and time stepping), s
     mesh : synthesized 3-D field at the last computed step, or None
     info : solver-specific facts (``harmonics_used``, factorizations, ...)
+    snapshots : plastic strain at the case's plastic-zone times, for :func:`smfem.plots.plastic_zones`
     """
 
     t: np.ndarray
@@ -33,3 +34,4 @@ class RunResult:
     cpu_time_s: float = 0.0
     mesh: meshio.Mesh | None = None
     info: dict = field(default_factory=dict)
+    snapshots: list = field(default_factory=list)

@@ -125,6 +125,8 @@ def _iterative(case, model, progress, with_fields, cpu0, direct: bool) -> RunRes
     record = lambda k: (values.__setitem__(k, probes.evaluate(np.concatenate(u), np.concatenate(v))),
                         pvalues.__setitem__(k, pprobes.evaluate(solver.state.peps)))
     record(0)
+    snapshot_steps = {int(round(t / case.dt)): t for t in case.references.get("plastic_zone_times", ())}
+    snapshots = []
     iterations, message = [], ""
     for k in range(1, n + 1):
         try:
@@ -134,6 +136,10 @@ def _iterative(case, model, progress, with_fields, cpu0, direct: bool) -> RunRes
             break
         iterations.append(its)
         record(k)
+        if k in snapshot_steps and case.material.plastic:
+            snapshots.append({"t": k * case.dt, "peps": solver.state.peps.mean(axis=1), "x3": model.x3,
+                              "element_x": model.mesh.element_x(), "body": case.body, "length": case.length,
+                              "axisymmetric": case.axisymmetric})
         if progress:
             progress(k, n)
     done = len(iterations) + 1
@@ -150,4 +156,5 @@ def _iterative(case, model, progress, with_fields, cpu0, direct: bool) -> RunRes
               else f"block-iterative (13)-(16): block SOR over {len(model.systems)} harmonics, omega {OMEGA:g}",
               "iterations_mean": float(its.mean()), "iterations_max": int(its.max()),
               "time_breakdown_s": dict(solver.timings)},
+        snapshots=snapshots,
     )

@@ -96,3 +96,17 @@ def test_cli_exit_3_when_a_step_does_not_converge(monkeypatch, tmp_path, capsys)
     assert main(["run", "thick_cylinder", "--set", "plastic=true", "--out", str(tmp_path), "--quiet"]) == 3
     assert "did not converge" in capsys.readouterr().err
     assert 1 < len(pd.read_csv(tmp_path / "history.csv")) < 101
+
+
+def test_plastic_run_writes_the_plastic_zones_at_the_paper_times(tmp_path):
+    import matplotlib.image as mpimg
+
+    from smfem.cli import main
+
+    assert main(["run", "notched_strip", "--set", "harmonics=20", "--out", str(tmp_path), "--quiet"]) == 0
+    image = mpimg.imread(tmp_path / "plastic_zones.png")
+    assert image.shape[0] > 300 and image.shape[1] > 600
+    result = solve(get_case("notched_strip", {"harmonics": 20}), with_fields=False)
+    assert [round(s["t"], 9) for s in result.snapshots] == [0.96e-4, 3.2e-4]
+    late = result.snapshots[-1]["peps"]
+    assert (late >= 1e-3).sum() > (result.snapshots[0]["peps"] >= 1e-3).sum() > 0  # the hinge grows
