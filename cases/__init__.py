@@ -6,7 +6,7 @@
 
 from . import dome, notched_cylinder, notched_strip, rod_impact, thick_cylinder
 from .case import Case
-from .params import ParameterError, parse_sets, validate
+from .params import ParameterError, UnsupportedCase, parse_sets, validate
 
 _MODULES = (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact)
 CASES = {m.NAME: m for m in _MODULES}
@@ -20,4 +20,4 @@ def get_case(name: str, overrides: dict | None = None) -> Case:
     return module.build(validate(module.SPECS, module.DEFAULTS, overrides or {}, name))
 
 
-__all__ = ["CASES", "Case", "ParameterError", "get_case", "parse_sets"]
+__all__ = ["CASES", "Case", "ParameterError", "UnsupportedCase", "get_case", "parse_sets"]

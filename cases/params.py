@@ -15,6 +15,13 @@ class ParameterError(ValueError):
     """A user mistake in a case name, a key or a value."""
 
 
+class UnsupportedCase(ValueError):
+    """A solver cannot run a case as it is set up (a clear, user-facing message).
+
+    Both solvers raise it (or a subclass), so the command line can tell it from a bug.
+    """
+
+
 @dataclass(frozen=True)
 class Spec:
     """Allowed values of one parameter: type, bounds (inclusive unless ``open_*``), choices."""

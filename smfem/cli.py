@@ -13,7 +13,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from cases import CASES, ParameterError, get_case, parse_sets
+from cases import CASES, ParameterError, UnsupportedCase, get_case, parse_sets
 
 EXIT_USAGE, EXIT_NOT_CONVERGED = 2, 3
 
@@ -105,15 +105,13 @@ def run(args) -> int:
 
 
 def main(argv=None) -> int:
-    from smfem.model import ModelError
-
     try:
         args = build_parser().parse_args(argv)
         if args.command == "cases":
             print(list_cases())
             return 0
         return run(args)
-    except (UsageError, ParameterError, ModelError) as exc:
+    except (UsageError, ParameterError, UnsupportedCase) as exc:
         print(f"smfem: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
 

@@ -16,13 +16,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from cases.geometry import RING
+from cases.params import UnsupportedCase
 
 from . import assembly, constraints, element, fourier, inhomogeneity, loads, symmetry
 from .constitutive import isotropic_D
 from .mesh import SectionMesh, section_mesh
 
 
-class ModelError(ValueError):
+class ModelError(UnsupportedCase):
     """The case asks for something this model cannot represent (a clear, user-facing message)."""
 
 

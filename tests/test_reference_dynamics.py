@@ -59,6 +59,18 @@ def test_result_layout(cylinder_2d, cylinder_plastic):
         assert {"dim", "element", "n_elements", "intorder", "factorizations"} <= set(res.info)
 
 
+def test_fields_file(tmp_path):
+    """The final-time mesh writes and reads back as VTU (quadratic hexahedra, peps per cell)."""
+    import meshio
+
+    res = solve(get_case("notched_strip", {"dim": 3, "t_end": 10 * 3.2e-6}))
+    res.mesh.write(tmp_path / "fields.vtu")
+    back = meshio.read(tmp_path / "fields.vtu")
+    assert back.cells[0].type == "hexahedron27" and len(back.cells[0]) == res.info["n_elements"]
+    np.testing.assert_allclose(back.point_data["displacement"], res.mesh.point_data["displacement"])
+    assert "peps" in back.cell_data
+
+
 def test_progress_callback():
     calls = []
     solve(get_case("dome", {"t_end": 5e-5}), progress=lambda n, total: calls.append((n, total)))

@@ -1,0 +1,14 @@
+"""Independent reference solver for the verification cases (scikit-fem, quadratic elements).
+
+>>> from cases import get_case
+>>> from reference_fem import solve
+>>> result = solve(get_case("dome"))            # 2D axisymmetric
+>>> result = solve(get_case("dome", {"dim": 3}))  # full 3D cap
+
+Imports nothing from :mod:`smfem`; sees a scene only through :mod:`cases`.
+"""
+
+from .model import Model
+from .solver import ReferenceResult, solve, static
+
+__all__ = ["Model", "ReferenceResult", "solve", "static"]

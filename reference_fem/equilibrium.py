@@ -1,0 +1,104 @@
+"""Equilibrium ``f_int(u) + c M u = rhs`` on the free dofs: elastic and elasto-plastic.
+
+``c = a0`` (Newmark) gives one time step, ``c = 0`` a static load step. The effective matrix
+``K + c M`` is factorized once (scipy ``splu``); elastic steps only back-substitute. The
+elasto-plastic Newton iteration starts with that elastic factorization (exact when no point
+yields) and refactorizes the consistent tangent only while points are yielding.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse.linalg as sla
+
+from . import forms
+from .plasticity import equivalent_plastic_strain, radial_return
+
+#: Newton iterations allowed per step before the run stops as not converged
+MAX_ITERATIONS = 50
+
+
+class NotConverged(RuntimeError):
+    """Newton did not reach the tolerance within :data:`MAX_ITERATIONS`."""
+
+
+class Elastic:
+    """Linear system ``(K + c M) u = rhs`` restricted to ``model.free``.
+
+    Attributes
+    ----------
+    factorizations : int, number of ``splu`` calls on ``K + c M`` or a tangent (1 here)
+    sigma : (n_qp, nc) stress of the last solution (Pa), Mandel, mesh frame
+    peps : (n_qp,) equivalent plastic strain (zero for an elastic body)
+    """
+
+    def __init__(self, model, c: float):
+        self.model = model
+        self.c = c
+        free = model.free
+        self.B = model.B[:, free].tocsr()
+        self.M = model.M[free][:, free]
+        self.A = (model.stiffness()[free][:, free] + c * self.M).tocsc()
+        self.lu = sla.splu(self.A)
+        self.factorizations = 1
+        nc = forms.n_components(model.dim)
+        self.sigma = np.zeros((model.n_qp, nc))
+        self.eps_p = np.zeros((model.n_qp, nc))
+
+    @property
+    def peps(self) -> np.ndarray:
+        return equivalent_plastic_strain(self.eps_p)
+
+    def strain(self, u: np.ndarray) -> np.ndarray:
+        """Mandel strain at every quadrature point, ``(n_qp, nc)``, of free-dof values ``u``."""
+        return (self.B @ u).reshape(self.model.n_qp, -1)
+
+    def solve(self, rhs: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, int]:
+        """Solution and iteration count (1) for the right-hand side ``rhs`` (free dofs)."""
+        u = self.lu.solve(rhs)
+        self.sigma = self.strain(u) @ self.model.D
+        return u, 1
+
+
+class Plastic(Elastic):
+    """Elasto-plastic equilibrium: Newton with the consistent tangent, radial return.
+
+    Converged when ``||du_i|| / ||u_i|| < tol`` (``du_i`` the Newton correction, ``u_i`` the
+    displacement after it) at an iteration after the first; the first, elastic, iteration is
+    final when no point yields. The material state is committed only on convergence.
+    """
+
+    def __init__(self, model, c: float, tol: float):
+        super().__init__(model, c)
+        self.tol = tol
+        mat = model.case.material
+        self.sigma_y, self.H = mat.sigma_y, mat.hardening_modulus
+        self.alpha = np.zeros(model.n_qp)
+
+    def _return(self, u):
+        return radial_return(self.strain(u), self.eps_p, self.alpha, self.model.lam, self.model.mu,
+                             self.sigma_y, self.H)
+
+    def _tangent_lu(self, ret):
+        """Factorized ``K_t + c M``: the elastic matrix plus the yielding points' correction."""
+        y = np.flatnonzero(ret.yielding)
+        nc = ret.sigma.shape[1]
+        By = self.B[(y[:, None] * nc + np.arange(nc)).ravel()]
+        dK = By.T @ (forms.material_blocks(ret.tangent[y] - self.model.D, self.model.weights[y]) @ By)
+        self.factorizations += 1
+        return sla.splu((self.A + dK).tocsc())
+
+    def solve(self, rhs, u):
+        ret = self._return(u)
+        lu = self.lu
+        for it in range(1, MAX_ITERATIONS + 1):
+            r = rhs - forms.internal_forces(self.B, self.model.weights, ret.sigma) - self.c * (self.M @ u)
+            du = lu.solve(r)
+            u = u + du
+            ret = self._return(u)
+            done = not ret.yielding.any() if it == 1 else np.linalg.norm(du) <= self.tol * np.linalg.norm(u)
+            if done:
+                self.sigma, self.eps_p, self.alpha = ret.sigma, ret.eps_p, ret.alpha
+                return u, it
+            lu = self._tangent_lu(ret) if ret.yielding.any() else self.lu
+        raise NotConverged(f"no convergence in {MAX_ITERATIONS} iterations")

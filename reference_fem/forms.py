@@ -1,0 +1,106 @@
+"""Weak forms and the strain operator.
+
+Strains and stresses are Mandel vectors (shear components times sqrt 2, so that
+``sigma : eps = sigma_m . eps_m`` and the tangent is a symmetric matrix):
+
+- 2D, 4 components ``(xx, yy, oo, sqrt2 xy)`` in the mesh frame, ``oo`` the out-of-plane
+  direction (plane strain: zero strain; axisymmetric: hoop strain ``u_r / r``);
+- 3D, 6 components ``(xx, yy, zz, sqrt2 yz, sqrt2 xz, sqrt2 xy)``.
+
+``weights`` are the quadrature weights times ``|det J|`` (times ``r`` when axisymmetric: every
+axisymmetric integral is per radian of circumference).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from skfem import BilinearForm, LinearForm
+from skfem.helpers import dot
+
+SQRT2 = np.sqrt(2.0)
+
+
+def n_components(dim: int) -> int:
+    """Number of Mandel components in ``dim`` mesh dimensions."""
+    return 4 if dim == 2 else 6
+
+
+def strain_operator(basis, axisymmetric: bool) -> tuple[sp.csr_matrix, np.ndarray]:
+    """Sparse strain operator ``B`` and the quadrature weights.
+
+    Parameters
+    ----------
+    basis : skfem.CellBasis of an ``ElementVector`` (2D or 3D)
+    axisymmetric : mesh coordinates are (r, z); adds the hoop strain ``u_r / r``
+
+    Returns
+    -------
+    B : csr_matrix, shape ``(n_qp * n_comp, n_dof)``; row ``q * n_comp + c`` is Mandel
+        component ``c`` at quadrature point ``q = element * n_qp_per_element + k``
+    weights : ndarray, shape ``(n_qp,)``, integration weights (volume; per radian if
+        axisymmetric)
+    """
+    dim = basis.mesh.dim()
+    nc = n_components(dim)
+    nel, nqe = basis.dx.shape
+    radius = np.asarray(basis.global_coordinates())[0]
+    rows = (np.arange(nel * nqe)[:, None] * nc + np.arange(nc)).reshape(nel, nqe, nc)
+    data, cols, rr = [], [], []
+    for i in range(basis.Nbfun):
+        field = basis.basis[i][0]
+        g = field.grad  # (dim, dim, nel, nqe): g[a, b] = d u_a / d x_b
+        if dim == 2:
+            hoop = np.asarray(field)[0] / radius if axisymmetric else np.zeros_like(g[0, 0])
+            comps = [g[0, 0], g[1, 1], hoop, (g[0, 1] + g[1, 0]) / SQRT2]
+        else:
+            comps = [g[0, 0], g[1, 1], g[2, 2], (g[1, 2] + g[2, 1]) / SQRT2,
+                     (g[0, 2] + g[2, 0]) / SQRT2, (g[0, 1] + g[1, 0]) / SQRT2]
+        values = np.stack(comps, axis=-1)  # (nel, nqe, nc)
+        nonzero = values != 0.0  # a vector basis function moves one component only
+        data.append(values[nonzero])
+        rr.append(rows[nonzero])
+        cols.append(np.broadcast_to(basis.element_dofs[i][:, None, None], values.shape)[nonzero])
+    B = sp.csr_matrix(
+        (np.concatenate(data), (np.concatenate(rr), np.concatenate(cols))),
+        shape=(nel * nqe * nc, basis.N),
+    )
+    weights = (basis.dx * (radius if axisymmetric else 1.0)).ravel()
+    return B, weights
+
+
+def elastic_matrix(lam: float, mu: float, dim: int) -> np.ndarray:
+    """Isotropic elasticity in Mandel form, shape ``(n_comp, n_comp)``: ``lam m m^T + 2 mu I``."""
+    nc = n_components(dim)
+    m = np.zeros(nc)
+    m[:3] = 1.0
+    return lam * np.outer(m, m) + 2.0 * mu * np.eye(nc)
+
+
+def material_blocks(D: np.ndarray, weights: np.ndarray) -> sp.bsr_matrix:
+    """Block-diagonal matrix of ``weights[q] * D[q]``; ``D`` is ``(n_qp, nc, nc)`` or ``(nc, nc)``."""
+    nq = weights.shape[0]
+    D = np.broadcast_to(D, (nq,) + D.shape[-2:]) * weights[:, None, None]
+    return sp.bsr_matrix((D, np.arange(nq), np.arange(nq + 1)), shape=(nq * D.shape[1],) * 2)
+
+
+def stiffness(B: sp.csr_matrix, weights: np.ndarray, D: np.ndarray) -> sp.csr_matrix:
+    """``K = B^T diag(w D) B`` (N/m, or N/m per radian when axisymmetric)."""
+    return (B.T @ (material_blocks(D, weights) @ B)).tocsr()
+
+
+def internal_forces(B: sp.csr_matrix, weights: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """Nodal internal forces ``B^T (w sigma)`` from Mandel stresses ``sigma``, shape ``(n_qp, nc)``."""
+    return B.T @ (sigma * weights[:, None]).ravel()
+
+
+@BilinearForm
+def mass(u, v, w):
+    """Consistent mass ``rho u . v``, times the radius ``w.weight`` when axisymmetric."""
+    return w.rho * dot(u, v) * w.weight
+
+
+@LinearForm
+def pressure(v, w):
+    """Pressure ``w.q`` (compression positive) on the outward normal ``w.n``, times ``w.weight``."""
+    return -w.q * dot(w.n, v) * w.weight

@@ -1,0 +1,356 @@
+"""Meshes of the case geometry: curved quadratic quadrilaterals (2D) and hexahedra (3D).
+
+Every mesh is a union of structured blocks in a parameter space. Each node of a quadratic
+element (vertices, edge and face midpoints, centre) is the image of its parametric position
+under the block's exact geometric map, so arcs and spherical surfaces are interpolated
+quadratically, not by chords. Cut-outs and the notch are holes: elements whose centre lies in
+a cut-out are not generated.
+
+Resolution (``refine`` = ``case.params['refine']`` multiplies every refinable count)
+----------------------------------------------------------------------------------
+- section axes: the paper's element counts (``case.section``) in 2D, half of them (rounded,
+  at least 1) in 3D, because one quadratic element spans about two of the paper's bilinear ones;
+  axes marked not refinable (one element across a plane-strain width) keep one element;
+- circumference of a ring that is not axisymmetric: ``N_THETA * refine`` elements (64, a
+  multiple of 8 so that the 45 degree patch and cut-out limits are nodes);
+- span of a prism: elements as long as the section's finest refinable element;
+- a solid of revolution with an axis (3D dome, rod): an O-grid disk (a square centre block and
+  four outer blocks) replaces the polar grid, so there is no degenerate element on the axis;
+  its radial density follows the section's axis-direction count.
+Break points are inserted where cut-outs, load patches and displacement probes begin or end,
+so these are element boundaries or nodes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Callable
+
+import numpy as np
+from skfem import ElementHex2, ElementQuad2, MeshHex1, MeshHex2, MeshQuad1, MeshQuad2
+from skfem.mapping import MappingIsoparametric
+
+from cases.params import UnsupportedCase
+from cases.geometry import RING
+
+from .frames import AXISYMMETRIC, PLANE_STRAIN, SOLID, in_intervals, representation, section_of, section_params, x3_of
+
+#: elements around the circumference of a (non-axisymmetric) ring at refine = 1: the
+#: circumferential direction dominates the error of the thick cylinder, in 2D and in 3D
+N_THETA = 64
+#: multiplier of the paper's section counts, per dimension
+SECTION_SCALE = {2: 1.0, 3: 0.5}
+#: half-width of the O-grid's centre square, as a fraction of the disk radius
+OGRID_CORE = 0.4
+
+
+#: tolerance of the inverse isoparametric map, in reference coordinates
+INVF_TOL = 1e-10
+
+
+class _Mapping(MappingIsoparametric):
+    """Isoparametric mapping whose inverse stops at :data:`INVF_TOL`.
+
+    scikit-fem's default (1e-12) lies below round-off for thin curved elements far from the
+    origin (the 3D dome: 0.2 in thick at 22 in), where Newton then stalls.
+    """
+
+    def invF(self, x, tind=None, newton_max_iters=50, newton_tol=INVF_TOL):
+        return super().invF(x, tind, newton_max_iters, newton_tol)
+
+
+class _Curved:
+    """Mixin: meshes whose isoparametric mapping is :class:`_Mapping`."""
+
+    def _mapping(self):
+        if not hasattr(self, "_cached_mapping"):
+            self._cached_mapping = _Mapping(self, self.elem(), self.bndelem)
+        return self._cached_mapping
+
+
+@dataclass(repr=False)
+class MeshQuad2Curved(_Curved, MeshQuad2):
+    """:class:`skfem.MeshQuad2` that can locate points (for ``probes``).
+
+    scikit-fem's quadratic 2D meshes have no element finder; searching the straight-sided
+    vertex mesh and inverting the curved map in the found element is exact for points inside
+    the chord polygon, which includes every mesh node.
+    """
+
+    def element_finder(self, mapping=None):
+        return MeshQuad1(np.ascontiguousarray(self.p[:, : self.nvertices]), self.t).element_finder()
+
+
+@dataclass(repr=False)
+class MeshHex2Curved(_Curved, MeshHex2):
+    """:class:`skfem.MeshHex2` with the tolerant inverse mapping."""
+
+
+@dataclass(frozen=True)
+class Block:
+    """A structured box of elements in a parameter space.
+
+    Attributes
+    ----------
+    axes : node coordinates along each parametric direction, one 1-D array per direction
+    to_mesh : map of parametric points, shape ``(len(axes), n)``, to mesh coordinates
+        ``(dim, n)``
+    """
+
+    axes: tuple[np.ndarray, ...]
+    to_mesh: Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class RefMesh:
+    """A mesh of one case, its representation (see :mod:`reference_fem.frames`) and the element
+    counts per mesh direction (``'elements'``: the total after removing holes)."""
+
+    mesh: MeshQuad2 | MeshHex2
+    rep: str
+    counts: dict
+
+
+def build_mesh(case) -> RefMesh:
+    """Mesh ``case`` in the representation its ``dim`` parameter asks for."""
+    rep = representation(case)
+    dim = 3 if rep == SOLID else 2
+    scale = SECTION_SCALE[dim] * case.refine
+    sec = case.section
+    s_extra, t_extra, x3_extra = _breaks(case, rep)
+    s_nodes = axis_nodes(sec.s, scale, s_extra)
+    t_nodes = axis_nodes(sec.t, scale, t_extra)
+    if case.body == RING and rep != AXISYMMETRIC:
+        x3_nodes = _span_nodes(0.0, 2 * np.pi, x3_extra, 2 * np.pi / (N_THETA * case.refine))
+    elif case.body != RING:
+        h = min(np.diff(n).min() for n, a in ((s_nodes, sec.s), (t_nodes, sec.t)) if a.refinable)
+        x3_nodes = _span_nodes(0.0, case.length, x3_extra, h)
+    else:
+        x3_nodes = None
+
+    if rep == AXISYMMETRIC:
+        blocks = [Block((s_nodes, t_nodes), lambda p: np.array(sec.to_x(p[0], p[1])))]
+        counts = {"s": len(s_nodes) - 1, "t": len(t_nodes) - 1}
+    elif rep == PLANE_STRAIN:
+        blocks, counts = _plane_blocks(case, s_nodes, t_nodes, x3_nodes)
+    elif case.body == RING and case.axisymmetric and _axis_direction(sec) is not None:
+        blocks, counts = _ogrid_blocks(sec, s_nodes, t_nodes)
+    elif case.body == RING:
+        def ring(p):
+            x1, x2 = sec.to_x(p[0], p[1])
+            return np.array([x1 * np.cos(p[2]), x1 * np.sin(p[2]), x2])
+
+        blocks = [Block((s_nodes, t_nodes, x3_nodes), ring)]
+        counts = {"s": len(s_nodes) - 1, "t": len(t_nodes) - 1, "theta": len(x3_nodes) - 1}
+    else:
+        def slab(p):
+            x1, x2 = sec.to_x(p[0], p[1])
+            return np.array([p[2], x1, x2])
+
+        blocks = [Block((s_nodes, t_nodes, x3_nodes), slab)]
+        counts = {"s": len(s_nodes) - 1, "t": len(t_nodes) - 1, "x3": len(x3_nodes) - 1}
+
+    def keep(x):
+        return ~_in_cutouts(case, rep, x)
+
+    mesh = assemble_blocks(blocks, keep)
+    return RefMesh(mesh, rep, dict(counts, elements=mesh.nelements))
+
+
+def axis_nodes(axis, scale: float, extra=()) -> np.ndarray:
+    """Node coordinates along a section axis, shape ``(n + 1,)``.
+
+    Each segment of ``axis`` keeps its element size divided by ``scale`` (refinable axes
+    only); ``extra`` break points inside a segment split it, each part getting at least one
+    element.
+    """
+    scale = scale if axis.refinable else 1.0
+    parts = []
+    for a, b, n in zip(axis.breaks[:-1], axis.breaks[1:], axis.counts):
+        h = (b - a) / max(1.0, n * scale)
+        parts.append(_span_nodes(a, b, extra, h)[:-1])
+    return np.concatenate(parts + [np.array([axis.breaks[-1]])])
+
+
+def _span_nodes(a: float, b: float, extra, h: float) -> np.ndarray:
+    """Nodes on ``[a, b]`` with the breaks ``extra`` that fall inside, elements about ``h`` long."""
+    tol = 1e-9 * (b - a)
+    cuts = sorted({a, b} | {float(e) for e in extra if a + tol < e < b - tol})
+    parts = [np.linspace(c0, c1, max(1, int(round((c1 - c0) / h))) + 1)[:-1] for c0, c1 in zip(cuts[:-1], cuts[1:])]
+    return np.concatenate(parts + [np.array([b])])
+
+
+def _breaks(case, rep: str):
+    """Break points along s, t and x3: cut-out and load limits, displacement-probe positions."""
+    s_extra, t_extra, x3_extra = [], [], []
+    for c in case.cutouts:
+        s_extra += list(c.s_range)
+        t_extra += list(c.t_range)
+        x3_extra += [x for iv in c.x3_intervals for x in iv]
+    for load in case.loads:
+        x3_extra += [x for iv in load.x3_intervals for x in iv]
+    for p in case.probes:
+        if p.kind == "point" and p.field == "u":
+            s, t = section_params(case.section, p.point[0], p.point[1])
+            s_extra.append(float(s))
+            t_extra.append(float(t))
+            x3_extra.append(p.point[2])
+    if case.body == RING:
+        x3_extra = [float(np.mod(x, 2 * np.pi)) for x in x3_extra]
+    return s_extra, t_extra, x3_extra
+
+
+def _plane_blocks(case, s_nodes, t_nodes, x3_nodes):
+    """The single block of a plane-strain mesh: ring annulus (s, theta) or prism (x3, t)."""
+    sec = case.section
+    dropped = sec.t if case.body == RING else sec.s
+    if sec.kind != "rect" or dropped.refinable:
+        raise ValueError(
+            f"reference solver: case {case.name!r} has no plane-strain 2D form; use dim=3"
+        )
+    if case.body == RING:
+        def annulus(p):
+            x1 = sec.to_x(p[0], 0.0)[0]
+            return np.array([x1 * np.cos(p[1]), x1 * np.sin(p[1])])
+
+        return [Block((s_nodes, x3_nodes), annulus)], {"s": len(s_nodes) - 1, "theta": len(x3_nodes) - 1}
+    return [Block((x3_nodes, t_nodes), lambda p: np.array([p[0], sec.to_x(0.0, p[1])[1]]))], {
+        "x3": len(x3_nodes) - 1, "t": len(t_nodes) - 1,
+    }
+
+
+def _axis_direction(section) -> str | None:
+    """Which parametric direction starts on the axis r = 0 (``'s'`` or ``'t'``), if any."""
+    (s0, s1), (t0, t1) = section.s.span, section.t.span
+    size = max(abs(v) for v in (*section.to_x(s1, t1), *section.to_x(s0, t0), *section.to_x(s1, t0)))
+    if np.all(np.abs(section.to_x(s0, np.linspace(t0, t1, 5))[0]) < 1e-12 * size):
+        return "s"
+    if np.all(np.abs(section.to_x(np.linspace(s0, s1, 5), t0)[0]) < 1e-12 * size):
+        return "t"
+    return None
+
+
+def _ogrid_blocks(sec, s_nodes, t_nodes):
+    """A solid of revolution around its axis: an O-grid disk swept along the other direction.
+
+    The disk coordinates (X, Y), radius rho = |(X, Y)| <= 1, azimuth phi, map the
+    axis-direction parameter linearly in rho; (x1, x2) = ``sec.to_x``; cartesian
+    (x1 cos phi, x1 sin phi, x2). The map is smooth on the axis (x1 ~ rho).
+    """
+    along = _axis_direction(sec)
+    radial_nodes, other = (s_nodes, t_nodes) if along == "s" else (t_nodes, s_nodes)
+    lo, hi = radial_nodes[0], radial_nodes[-1]
+    n = len(radial_nodes) - 1
+    n_core = 2 * int(np.ceil(OGRID_CORE * n))
+    n_ring = int(np.ceil((1 - OGRID_CORE) * n))
+    c = OGRID_CORE
+
+    def cap(disk, w):
+        rho = np.hypot(disk[0], disk[1])
+        u = lo + (hi - lo) * rho
+        s, t = (u, w) if along == "s" else (w, u)
+        x1, x2 = sec.to_x(s, t)
+        safe = np.where(rho > 0, rho, 1.0)
+        cos_phi, sin_phi = np.where(rho > 0, disk[0] / safe, 1.0), disk[1] / safe
+        return np.array([x1 * cos_phi, x1 * sin_phi, x2])
+
+    core = np.linspace(-c, c, n_core + 1)
+    blocks = [Block((core, core, other), lambda p: cap(p[:2], p[2]))]
+    for k in range(4):
+        rot = np.array([[np.cos(k * np.pi / 2), -np.sin(k * np.pi / 2)], [np.sin(k * np.pi / 2), np.cos(k * np.pi / 2)]])
+
+        def outer(p, rot=rot):
+            lam, eta = p[0], p[1]
+            square = np.array([np.full_like(eta, c), c * eta])
+            circle = np.array([np.cos(np.pi / 4 * eta), np.sin(np.pi / 4 * eta)])
+            return cap(rot @ ((1 - lam) * square + lam * circle), p[2])
+
+        blocks.append(Block((np.linspace(0.0, 1.0, n_ring + 1), np.linspace(-1.0, 1.0, n_core + 1), other), outer))
+    counts = {"core": n_core, "radial": n_ring, "around": 4 * n_core, "layers": len(other) - 1}
+    return blocks, counts
+
+
+def _in_cutouts(case, rep: str, x: np.ndarray) -> np.ndarray:
+    """Mask of mesh points (element centres) ``x``, shape ``(dim, n)``, inside a cut-out."""
+    if not case.cutouts:
+        return np.zeros(x.shape[1], bool)
+    s, t = section_of(case, rep, x)
+    x3 = x3_of(case, rep, x)
+    period = 2 * np.pi if case.body == RING else None
+    mask = np.zeros(x.shape[1], bool)
+    for c in case.cutouts:
+        inside = np.ones(x.shape[1], bool)
+        for v, (a, b), axis in ((s, c.s_range, case.section.s), (t, c.t_range, case.section.t)):
+            if np.all(np.isnan(v)):
+                # a dropped (plane-strain) direction: the cut-out must run through all of it
+                if not np.allclose((a, b), axis.span):
+                    raise UnsupportedCase("reference solver: a cut-out that does not span the plane-strain "
+                                     "direction needs dim=3")
+                continue
+            inside &= (v > a) & (v < b)
+        if rep == AXISYMMETRIC:
+            if not np.allclose(sum(b - a for a, b in c.x3_intervals), 2 * np.pi):
+                raise UnsupportedCase("reference solver: a cut-out that is not axisymmetric needs dim=3")
+        else:
+            inside &= in_intervals(x3, c.x3_intervals, period)
+        mask |= inside
+    return mask
+
+
+def assemble_blocks(blocks, keep: Callable[[np.ndarray], np.ndarray]) -> MeshQuad2 | MeshHex2:
+    """Quadratic mesh from structured blocks; ``keep(centres)`` selects the elements.
+
+    Parameters
+    ----------
+    blocks : list of :class:`Block`, all with 2 or all with 3 parametric directions
+    keep : maps element centres, shape ``(dim, n_elements)``, to a boolean mask
+
+    Nodes shared by blocks (or across a periodic seam) are merged by position.
+    """
+    pdim = len(blocks[0].axes)
+    elem, lin_cls, quad_cls = (ElementQuad2, MeshQuad1, MeshQuad2Curved) if pdim == 2 else (ElementHex2, MeshHex1, MeshHex2Curved)
+    ref = elem.doflocs  # (n_local_nodes, pdim); vertices first, centre last
+    xs = []
+    for block in blocks:
+        idx = np.meshgrid(*(np.arange(len(a) - 1) for a in block.axes), indexing="ij")
+        lo = np.array([a[i.ravel()] for a, i in zip(block.axes, idx)])
+        hi = np.array([a[i.ravel() + 1] for a, i in zip(block.axes, idx)])
+        param = lo[:, :, None] + (hi - lo)[:, :, None] * ref.T[:, None, :]
+        x = block.to_mesh(param.reshape(pdim, -1))
+        xs.append(x.reshape(x.shape[0], lo.shape[1], ref.shape[0]))
+    x = np.concatenate(xs, axis=1)
+    x = x[:, keep(x[:, :, -1])]
+    x = _positively_oriented(x, ref)
+    n_vert = elem.refdom.nnodes
+    scale = np.abs(x).max()
+    vid, p = _merge(x[:, :, :n_vert].reshape(x.shape[0], -1), scale)
+    lin = lin_cls(np.ascontiguousarray(p), np.ascontiguousarray(vid.reshape(-1, n_vert).T))
+    mesh = quad_cls.from_mesh(lin)
+    doflocs = mesh.doflocs.copy()
+    doflocs[:, mesh.dofs.element_dofs] = x.transpose(0, 2, 1)
+    return replace(mesh, doflocs=doflocs)
+
+
+def _merge(points: np.ndarray, scale: float):
+    """Ids of coincident points (within 1e-9 ``scale``) and the unique points, ``(dim, m)``."""
+    key = np.round(points / (1e-9 * scale)).astype(np.int64)
+    _, first, inverse = np.unique(key.T, axis=0, return_index=True, return_inverse=True)
+    return inverse.ravel(), points[:, first]
+
+
+def mirror_permutation(ref: np.ndarray) -> list[int]:
+    """Local node permutation of the reflection xi_1 -> 1 - xi_1 of reference nodes ``ref``."""
+    mirrored = ref.copy()
+    mirrored[:, 0] = 1 - mirrored[:, 0]
+    return [int(np.argmin(np.abs(ref - m).sum(axis=1))) for m in mirrored]
+
+
+def _positively_oriented(x: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """Reorder the local nodes of elements whose map reverses orientation (mirror in xi_1)."""
+    pdim = ref.shape[1]
+    corner = [int(np.argmin(np.abs(ref - e).sum(axis=1))) for e in np.vstack([np.zeros(pdim), np.eye(pdim)])]
+    edges = np.stack([x[:, :, corner[d + 1]] - x[:, :, corner[0]] for d in range(pdim)], axis=-1)
+    det = np.linalg.det(edges.transpose(1, 0, 2))
+    out = x.copy()
+    out[:, det < 0] = x[:, det < 0][:, :, mirror_permutation(ref)]
+    return out

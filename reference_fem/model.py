@@ -1,0 +1,186 @@
+"""The assembled finite element model of one case: bases, operators, loads and supports."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from skfem import CellBasis, ElementHex2, ElementQuad2, ElementVector, FacetBasis, asm
+
+from cases.params import UnsupportedCase
+from cases.geometry import PRISM, RING
+
+from . import forms
+from .frames import AXISYMMETRIC, SOLID, in_intervals, section_of, x3_of
+from .mesh import RefMesh, build_mesh
+
+#: Gauss rule: 3 points per direction, exact for the stiffness and the consistent mass of
+#: straight-sided quadratic elements (the mass also with the axisymmetric factor r)
+INTORDER = 4
+
+
+class Model:
+    """Mesh, strain operator, mass, load vector and supported dofs of a case.
+
+    Attributes
+    ----------
+    case, rmesh : the case and its :class:`~reference_fem.mesh.RefMesh`
+    basis : skfem.CellBasis of the vector quadratic element
+    B, weights : strain operator ``(n_qp * nc, n_dof)`` and weights ``(n_qp,)``
+        (see :func:`reference_fem.forms.strain_operator`)
+    x_qp : ndarray, ``(dim, n_qp)``, quadrature points in mesh coordinates
+    M : csr_matrix, consistent mass (kg, or kg per radian when axisymmetric)
+    Q : ndarray, ``(n_dof,)``, load vector of the case's pressures (N; per radian if axisymmetric)
+    fixed, free : ndarray of int, supported and free dof indices
+    fix_rigid_body : for static solves of rings that are not axisymmetric (no support against
+        in-plane rigid-body motion): also fix u_y at the two inner-surface nodes on the x axis
+        and u_x at the one on the +y axis, exact for loads symmetric about both axes
+    lam, mu : Lame constants (Pa)
+    D : (nc, nc) elastic Mandel matrix (Pa)
+
+    Supports: a support on edge ``'all'`` fixes that component at every node, so in 3D the
+    plane-strain direction (u_z of the cylinders, u_width of the strip) is zero on both faces
+    and in between (exact plane strain). Prisms also get their diaphragm ends (u1 = u2 = 0 at
+    x3 = 0 and L, the Fourier basis's end condition), axisymmetric sections u_r = 0 on the axis.
+    """
+
+    def __init__(self, case, rmesh: RefMesh | None = None, fix_rigid_body: bool = False):
+        self.case = case
+        self.rmesh = rmesh if rmesh is not None else build_mesh(case)
+        self.rep = self.rmesh.rep
+        mesh = self.rmesh.mesh
+        self.dim = mesh.dim()
+        scalar = ElementQuad2() if self.dim == 2 else ElementHex2()
+        self.element = ElementVector(scalar)
+        self.basis = CellBasis(mesh, self.element, intorder=INTORDER)
+        axisym = self.rep == AXISYMMETRIC
+        self.B, self.weights = forms.strain_operator(self.basis, axisym)
+        self.x_qp = np.asarray(self.basis.global_coordinates()).reshape(self.dim, -1)
+        self.lam, self.mu = case.material.lame
+        self.D = forms.elastic_matrix(self.lam, self.mu, self.dim)
+        radius = np.asarray(self.basis.global_coordinates())[0] if axisym else np.ones(self.basis.dx.shape)
+        self.M = asm(forms.mass, self.basis, rho=case.material.rho, weight=radius).tocsr()
+        self.Q = self._load_vector()
+        self.fixed = self._fixed_dofs()
+        if fix_rigid_body and case.body == RING and self.rep != AXISYMMETRIC:
+            self.fixed = np.union1d(self.fixed, self._rigid_body_dofs())
+        self.free = np.setdiff1d(np.arange(self.basis.N), self.fixed)
+
+    @property
+    def n_qp(self) -> int:
+        return self.weights.shape[0]
+
+    def stiffness(self) -> sp.csr_matrix:
+        """Elastic stiffness (N/m, or N/m per radian when axisymmetric)."""
+        return forms.stiffness(self.B, self.weights, self.D)
+
+    def edge_facets(self, edge: str) -> np.ndarray:
+        """Boundary facets on a named (or parametric) section edge."""
+        mesh = self.rmesh.mesh
+        facets = mesh.boundary_facets()
+        name = self.case.section.edge(edge)
+        axis = self.case.section.s if name[0] == "s" else self.case.section.t
+        target = axis.span[0] if name.endswith("min") else axis.span[1]
+        s, t = section_of(self.case, self.rep, mesh.p[:, mesh.facets[:, facets].ravel()])
+        v = (s if name[0] == "s" else t).reshape(mesh.facets.shape[0], -1)
+        size = max(abs(a) for a in axis.span) or 1.0
+        found = facets[np.all(np.abs(v - target) < 1e-8 * size, axis=0)]
+        if found.size == 0:
+            raise ValueError(f"reference solver: edge {edge!r} has no boundary facets")
+        return found
+
+    def _facet_midpoints(self, facets: np.ndarray) -> np.ndarray:
+        mesh = self.rmesh.mesh
+        return mesh.p[:, mesh.facets[:, facets]].mean(axis=1)
+
+    def _facets_where(self, mask_of_points) -> np.ndarray:
+        """Boundary facets all of whose vertices satisfy ``mask_of_points(x)``."""
+        mesh = self.rmesh.mesh
+        facets = mesh.boundary_facets()
+        x = mesh.p[:, mesh.facets[:, facets].ravel()]
+        return facets[np.all(mask_of_points(x).reshape(mesh.facets.shape[0], -1), axis=0)]
+
+    def _load_vector(self) -> np.ndarray:
+        Q = np.zeros(self.basis.N)
+        period = 2 * np.pi if self.case.body == RING else None
+        for load in self.case.loads:
+            facets = self.edge_facets(load.edge)
+            if self.rep != AXISYMMETRIC:
+                facets = facets[in_intervals(x3_of(self.case, self.rep, self._facet_midpoints(facets)),
+                                             load.x3_intervals, period)]
+            elif not np.isclose(sum(b - a for a, b in load.x3_intervals), 2 * np.pi):
+                raise UnsupportedCase("reference solver: a load that is not axisymmetric needs dim=3")
+            fb = FacetBasis(self.rmesh.mesh, self.element, facets=facets, intorder=INTORDER)
+            x = np.asarray(fb.global_coordinates())
+            weight = x[0] if self.rep == AXISYMMETRIC else np.ones_like(x[0])
+            Q += asm(forms.pressure, fb, q=load.q, weight=weight)
+        return Q
+
+    def mesh_components(self, components) -> list[int]:
+        """Mesh-frame displacement components (0-based) of body ``components`` (1-based).
+
+        A component the 2D representation has no dof for (the plane-strain direction; the
+        hoop displacement of an axisymmetric section) is zero by construction and maps to
+        nothing. Radial or hoop alone on a cartesian mesh cannot be expressed as a dof
+        constraint and raises ``ValueError``.
+        """
+        comps = set(components)
+        if self.case.body == PRISM:
+            table = {1: [1] if self.rep == SOLID else [], 2: [2] if self.rep == SOLID else [1], 3: [0]}
+            return sorted(c for k in comps for c in table[k])
+        if self.rep == AXISYMMETRIC:
+            return sorted({1: 0, 2: 1}[k] for k in comps if k != 3)
+        out = []
+        if comps & {1, 3}:
+            if not {1, 3} <= comps:
+                raise UnsupportedCase("reference solver: a radial or hoop support alone is not available "
+                                 "on a cartesian mesh")
+            out += [0, 1]
+        if 2 in comps and self.rep == SOLID:
+            out.append(2)
+        return out
+
+    def _dofs(self, facets: np.ndarray | None, comps: list[int]) -> np.ndarray:
+        """Dofs of mesh components ``comps`` on ``facets`` (all elements when ``None``)."""
+        if not comps:
+            return np.zeros(0, int)
+        if facets is None:
+            view = self.basis.get_dofs(elements=np.arange(self.rmesh.mesh.nelements))
+        else:
+            view = self.basis.get_dofs(facets=facets)
+        return np.concatenate([view.all(f"u^{c + 1}") for c in comps])
+
+    def _fixed_dofs(self) -> np.ndarray:
+        case = self.case
+        fixed = [np.zeros(0, int)]
+        for support in case.supports:
+            comps = self.mesh_components(support.components)
+            facets = None if support.edge == "all" else self.edge_facets(support.edge)
+            fixed.append(self._dofs(facets, comps))
+        if case.body == PRISM:
+            # the prism's Fourier basis is a diaphragm end: u1 = u2 = 0 at x3 = 0 and x3 = L
+            for end in (0.0, case.length):
+                facets = self._facets_where(lambda x, end=end: np.abs(x3_of(case, self.rep, x) - end) < 1e-9 * case.length)
+                fixed.append(self._dofs(facets, self.mesh_components((1, 2))))
+        if self.rep == AXISYMMETRIC:
+            # regularity on the axis: no radial displacement at r = 0
+            size = np.abs(self.rmesh.mesh.p).max()
+            facets = self._facets_where(lambda x: np.abs(x[0]) < 1e-9 * size)
+            fixed.append(self._dofs(facets, [0]))
+        return np.unique(np.concatenate(fixed)).astype(int)
+
+    def _rigid_body_dofs(self) -> np.ndarray:
+        p = self.basis.doflocs[:, :: self.dim]
+        r = np.hypot(p[0], p[1])
+        inner = np.isclose(r, r.min())
+        if self.dim == 3:
+            inner &= np.isclose(p[2], p[2].min())
+        out = []
+        for angle, comp in ((0.0, 1), (np.pi, 1), (np.pi / 2, 0)):
+            target = r.min() * np.array([np.cos(angle), np.sin(angle)])
+            node = int(np.argmin(np.where(inner, np.hypot(p[0] - target[0], p[1] - target[1]), np.inf)))
+            out.append(node * self.dim + comp)
+        return np.array(out)
+
+    def nodal_displacement(self, u: np.ndarray) -> np.ndarray:
+        """Mesh-frame displacement at the mesh nodes, shape ``(dim, n_nodes)``."""
+        return u.reshape(-1, self.dim).T

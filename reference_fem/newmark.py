@@ -1,0 +1,47 @@
+"""Newmark time stepping (alpha = 0.25, delta = 0.5) as a generator over steps.
+
+Constants come from :func:`cases.timeint.newmark_constants`, shared by every solver. The load is
+a Heaviside step, on at t = 0, so ``Q(t) = Q`` for every t >= 0 and the initial acceleration
+solves ``M a0 = Q - K u0``.
+"""
+
+from __future__ import annotations
+
+from typing import Iterator
+
+import numpy as np
+import scipy.sparse.linalg as sla
+
+from cases.timeint import newmark_constants
+
+
+def march(system, Q: np.ndarray, u0: np.ndarray, v0: np.ndarray, dt: float, n_steps: int,
+          ) -> Iterator[tuple[int, float, np.ndarray, np.ndarray, int]]:
+    """Yield ``(step, t, u, v, iterations)`` for steps 1 .. ``n_steps``.
+
+    Parameters
+    ----------
+    system : :class:`~reference_fem.equilibrium.Elastic` (or ``Plastic``) built with
+        ``c = a0 = 1 / (alpha dt^2)``; its ``solve(rhs, u)`` returns ``(u, iterations)``
+    Q : (n_free,) load vector (N)
+    u0, v0 : (n_free,) initial displacement (m; zero stress assumed, so ``u0`` must be 0
+        unless the body is free of stress there) and velocity (m/s)
+    dt : time step (s)
+    n_steps : number of steps
+
+    Raises
+    ------
+    reference_fem.equilibrium.NotConverged
+        from ``system.solve``; the steps yielded before it stand.
+    """
+    c = newmark_constants(dt)
+    if not np.isclose(system.c, c.a0):
+        raise ValueError("system was not built with c = a0 of this time step")
+    u, v = u0.copy(), v0.copy()
+    a = sla.splu(system.M.tocsc()).solve(Q - system.A @ u0 + system.c * (system.M @ u0))
+    for n in range(1, n_steps + 1):
+        u_new, iterations = system.solve(Q + system.M @ (c.a0 * u + c.a2 * v + c.a3 * a), u)
+        a_new = c.a0 * (u_new - u) - c.a2 * v - c.a3 * a
+        v = v + c.a6 * a + c.a7 * a_new
+        u, a = u_new, a_new
+        yield n, n * dt, u, v, iterations

@@ -1,0 +1,190 @@
+"""Entry points: :func:`solve` (transient, the case's window) and :func:`static`."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import meshio
+import numpy as np
+from skfem import ElementHex2
+from skfem.io.meshio import HEX_MAPPING
+
+from cases.params import UnsupportedCase
+from cases.timeint import newmark_constants
+
+from .equilibrium import Elastic, NotConverged, Plastic
+from .frames import mesh_frame_to_cartesian, to_cartesian
+from .mesh import build_mesh, mirror_permutation
+from .model import INTORDER, Model
+from .newmark import march
+from .probes import Probes
+
+
+@dataclass
+class ReferenceResult:
+    """History and diagnostics of one reference run.
+
+    Attributes
+    ----------
+    t : (n_steps + 1,) times (s), starting at 0
+    history : probe name -> (n_steps + 1,) values, in the order of ``case.probes``; a run that
+        stopped early has only the converged steps
+    n_dof : number of free dofs
+    iterations : Newton iterations per step (1 for a linear step)
+    converged : False when a step did not converge (the run stopped there)
+    message : why the run stopped early, '' otherwise
+    cpu_time_s : process CPU time (s) of the solve: assembly, factorization and time stepping;
+        mesh generation excluded
+    mesh : meshio.Mesh at the final time (cartesian points; point data 'displacement', 3
+        components; cell data 'peps', the element mean of the equivalent plastic strain, when
+        plastic)
+    info : 'dim', 'representation', 'element', 'n_elements', 'intorder', 'counts' (elements per
+        mesh direction), 'factorizations' (of K + a0 M and of tangents), 'cpu_mesh_s'
+    """
+
+    t: np.ndarray
+    history: dict
+    n_dof: int
+    iterations: list
+    converged: bool
+    message: str
+    cpu_time_s: float
+    mesh: meshio.Mesh | None
+    info: dict = field(default_factory=dict)
+
+
+def _system(model: Model, c: float):
+    mat = model.case.material
+    return Plastic(model, c, model.case.params["tol"]) if mat.plastic else Elastic(model, c)
+
+
+def _check_supported(case):
+    if case.wall is not None:
+        raise UnsupportedCase("reference solver: contact (rod_impact) is not available yet")
+
+
+def solve(case, progress: Callable[[int, int], None] | None = None) -> ReferenceResult:
+    """Transient response of ``case`` over its time window, Newmark (alpha 0.25, delta 0.5).
+
+    Parameters
+    ----------
+    case : cases.Case
+    progress : optional ``callable(step, n_steps)`` called after every step
+
+    Returns
+    -------
+    ReferenceResult
+
+    Raises
+    ------
+    cases.params.UnsupportedCase
+        for scenes the reference solver cannot represent (contact; a 2D form that does not
+        exist for the scene).
+    """
+    _check_supported(case)
+    cpu0 = time.process_time()
+    rmesh = build_mesh(case)
+    cpu_mesh = time.process_time() - cpu0
+    cpu1 = time.process_time()
+    model = Model(case, rmesh)
+    dt, n_steps = case.dt, case.n_steps
+    system = _system(model, newmark_constants(dt).a0)
+    probes = Probes(model)
+    free = model.free
+    u_full = np.zeros(model.basis.N)
+    zero = np.zeros(free.size)
+    times, rows, iterations = [0.0], [probes.values(u_full, system)], []
+    converged, message = True, ""
+    steps = march(system, model.Q[free], zero, _initial_velocity(model), dt, n_steps)
+    try:
+        for n, t, u, _v, its in steps:
+            u_full[free] = u
+            times.append(t)
+            rows.append(probes.values(u_full, system))
+            iterations.append(its)
+            if progress is not None:
+                progress(n, n_steps)
+    except NotConverged as err:
+        converged = False
+        message = f"step {len(times)} (t = {len(times) * dt:.6g} s) did not converge: {err}"
+    cpu = time.process_time() - cpu1
+    history = {name: np.array([r[k] for r in rows]) for k, name in enumerate(probes.names)}
+    return ReferenceResult(
+        t=np.array(times), history=history, n_dof=int(free.size), iterations=iterations,
+        converged=converged, message=message, cpu_time_s=cpu,
+        mesh=output_mesh(model, u_full, system), info=_info(model, system, cpu_mesh),
+    )
+
+
+def static(case, factors=(1.0,)) -> tuple[Model, list[np.ndarray], list[int], object]:
+    """Static solution under the case's loads scaled by each of ``factors`` in turn.
+
+    Plastic cases are loaded incrementally (each factor is one load step, the state carried
+    over). In-plane rigid-body motion of rings that are not axisymmetric is removed as in
+    :class:`~reference_fem.model.Model` (``fix_rigid_body``).
+
+    Returns
+    -------
+    model : Model
+    displacements : list of (n_dof,) full dof vectors (m), one per factor
+    iterations : Newton iterations per load step
+    system : the equilibrium system after the last step (``sigma``, ``peps``)
+    """
+    _check_supported(case)
+    model = Model(case, fix_rigid_body=True)
+    system = _system(model, 0.0)
+    u = np.zeros(model.free.size)
+    out, iterations = [], []
+    for f in factors:
+        u, its = system.solve(f * model.Q[model.free], u)
+        full = np.zeros(model.basis.N)
+        full[model.free] = u
+        out.append(full)
+        iterations.append(its)
+    return model, out, iterations, system
+
+
+def _initial_velocity(model: Model) -> np.ndarray:
+    """Uniform initial velocity of the case on the free dofs (m/s)."""
+    v = np.zeros(model.basis.N)
+    for iv in model.case.initial_velocity:
+        for c in model.mesh_components((iv.component,)):
+            v[c :: model.dim] = iv.value
+    return v[model.free]
+
+
+def output_mesh(model: Model, u_full: np.ndarray, system) -> meshio.Mesh:
+    """meshio mesh of the quadratic elements with the displacement (cartesian, 3 components)."""
+    mesh, case, rep = model.rmesh.mesh, model.case, model.rep
+    u = np.zeros((3, mesh.p.shape[1]))
+    u[: model.dim] = model.nodal_displacement(u_full)
+    cells = mesh.dofs.element_dofs
+    cell_type = "quad9" if model.dim == 2 else "hexahedron27"
+    if model.dim == 3:
+        # scikit-fem's reference hexahedron is left-handed in VTK's node order: mirror it
+        cells = cells[mirror_permutation(ElementHex2.doflocs)][HEX_MAPPING]
+    cell_data = {}
+    if case.material.plastic:
+        cell_data["peps"] = [system.peps.reshape(mesh.nelements, -1).mean(axis=1)]
+    return meshio.Mesh(
+        to_cartesian(case, rep, mesh.p).T, {cell_type: cells.T},
+        point_data={"displacement": (mesh_frame_to_cartesian(case, rep) @ u).T}, cell_data=cell_data,
+    )
+
+
+def _info(model: Model, system, cpu_mesh: float) -> dict:
+    return {
+        "dim": model.dim,
+        "representation": model.rep,
+        "element": type(model.element.elem).__name__,
+        "n_elements": int(model.rmesh.mesh.nelements),
+        "intorder": INTORDER,
+        "counts": model.rmesh.counts,
+        "factorizations": system.factorizations,
+        "cpu_mesh_s": cpu_mesh,
+    }
+
+
+__all__ = ["ReferenceResult", "solve", "static"]
