@@ -160,3 +160,13 @@ def test_notched_cases_run_in_3d(name):
     assert two.converged and three.converged
     first = get_case(name).probes[0].name
     assert max_norm_error(three.history[first], two.history[first]) < 0.05
+
+
+@pytest.mark.slow
+def test_thick_cylinder_2d_against_3d_within_half_a_percent_at_refine_2():
+    """The issue's 0.5 % for every probe, B_ut included, once the 3D mesh resolves the patch
+    edge: 3D refine 2 (15 x 128 x 1 hexahedra, ~48k dof, ~30 s) against 2D refine 2."""
+    two = solve(get_case("thick_cylinder", {"refine": 2}))
+    three = solve(get_case("thick_cylinder", {"refine": 2, "dim": 3}))
+    for name in ("A_ur", "B_ut", "C_ur"):
+        assert max_norm_error(three.history[name], two.history[name]) < 5e-3, name
