@@ -22,7 +22,7 @@ import scipy.sparse.linalg as sla
 from cases.timeint import newmark_constants
 from cases.material import lame
 
-from .plasticity import wilkins
+from .plasticity import intensity, wilkins
 from .sampling import SamplePoints
 
 
@@ -32,10 +32,17 @@ class NotConverged(RuntimeError):
 
 @dataclass
 class PointState:
-    """Committed material state at the sample points (n_elements, 4, n_x3, ...)."""
+    """Committed material state at the sample points (n_elements, 4, n_x3, ...): stresses,
+    plastic strains (Voigt) and the accumulated equivalent plastic strain."""
 
     sigma: np.ndarray
-    peps: np.ndarray
+    eps_p: np.ndarray
+    alpha: np.ndarray
+
+    @property
+    def peps(self) -> np.ndarray:
+        """Plastic strain intensity sqrt(2/3 eps_p : eps_p) (what the probes report)."""
+        return intensity(self.eps_p)
 
 
 class BlockIterative:
@@ -72,7 +79,7 @@ class BlockIterative:
         self.sigma_y0, self.H = mat.sigma_y, mat.hardening_modulus
         f = model.factor[:, None, :]  # the contrast material's stiffness is scaled
         self.mu = lame(mat.E, mat.nu)[1] * np.broadcast_to(f, (len(f), 4, f.shape[2]))
-        self.state = PointState(np.zeros(self.mu.shape + (6,)), np.zeros(self.mu.shape))
+        self.state = PointState(np.zeros(self.mu.shape + (6,)), np.zeros(self.mu.shape + (6,)), np.zeros(self.mu.shape))
         self.timings = {"synthesis": 0.0, "stress": 0.0, "projection": 0.0, "solves": 0.0}
 
     def inertia(self, i: int, new: list[np.ndarray], predicted: list[np.ndarray]) -> np.ndarray:
@@ -85,7 +92,7 @@ class BlockIterative:
     def initial(self, u0: list[np.ndarray], v0: list[np.ndarray]):
         """Displacements, velocities and accelerations at t = 0 from ``M a = Q - R(u0)``."""
         S = self.model.systems
-        self.state = PointState(self.points.stress(u0), self.state.peps)
+        self.state = PointState(self.points.stress(u0), self.state.eps_p, self.state.alpha)
         force = [s.Q - self.points.force_of_mode(i, self.state.sigma) for i, s in enumerate(S)]
         if self.model.coupling:
             M = sp.bmat([[sp.diags(s.M) if i == j else (self.model.coupling[i, j][1] if (i, j) in self.model.coupling else None)
@@ -130,16 +137,16 @@ class BlockIterative:
             trial = self.state.sigma + pts.stress([x - y for x, y in zip(new, u)])
             t1 = tick()
             if self.plastic:
-                sigma, peps, _ = wilkins(trial, self.state.peps, self.mu, self.sigma_y0, self.H)
+                sigma, alpha, deps_p, _ = wilkins(trial, self.state.alpha, self.mu, self.sigma_y0, self.H)
             else:
-                sigma, peps = trial, self.state.peps
+                sigma, alpha, deps_p = trial, self.state.alpha, 0.0
             self.timings["synthesis"] += t1 - t0
             self.timings["stress"] += tick() - t1
             size2 = sum(x @ x for x in new)
             if not np.isfinite(change2):
                 break
             if change2 <= self.tol**2 * max(size2, 1e-300):
-                self.state = PointState(sigma, peps)
+                self.state = PointState(sigma, self.state.eps_p + deps_p, alpha)
                 accel = [c.a0 * (x - p) for x, p in zip(new, predicted)]
                 vel = [vi + c.a6 * ai + c.a7 * an for vi, ai, an in zip(v, a, accel)]
                 return new, vel, accel, iteration

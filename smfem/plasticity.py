@@ -7,6 +7,11 @@ yield stress grows with the equivalent plastic strain ``peps = int sqrt(2/3 d ep
 ``sigma_y = sigma_y0 + H peps``. The correction scales the trial deviator back to the yield
 surface (radial return), which for ideal plasticity is exactly Wilkins' formula
 ``sigma = sigma_0 I + S tau_s / T``.
+
+Two plastic measures are tracked: the accumulated ``alpha = int sqrt(2/3 d eps_p : d eps_p)``,
+which drives hardening and never decreases, and the plastic strain tensor ``eps_p`` (Voigt,
+engineering shears), whose intensity ``sqrt(2/3 eps_p : eps_p)`` is what probes report as
+``peps`` (CASES.md); it can fall under reversed flow.
 """
 
 from __future__ import annotations
@@ -24,29 +29,38 @@ def shear_intensity(sigma: np.ndarray) -> np.ndarray:
     return np.sqrt(0.5 * (s * s).sum(-1) + (sigma[..., 3:] ** 2).sum(-1))
 
 
-def wilkins(trial: np.ndarray, peps: np.ndarray, mu: np.ndarray, sigma_y0: float, H: float):
+def wilkins(trial: np.ndarray, alpha: np.ndarray, mu: np.ndarray, sigma_y0: float, H: float):
     """Return-map trial stresses onto the yield surface.
 
     Parameters
     ----------
     trial : (..., 6) trial stresses ``sigma_n + D d_eps``
-    peps : (...) equivalent plastic strain at the start of the step
+    alpha : (...) accumulated equivalent plastic strain at the start of the step
     mu : (...) shear modulus at each point (the contrast material's is scaled)
     sigma_y0, H : initial yield stress in tension and the plastic modulus
 
     Returns
     -------
-    sigma : (..., 6), peps : (...), yielding : (...) bool
+    sigma : (..., 6), alpha : (...), d_eps_p : (..., 6) plastic strain increment (engineering
+    shears), yielding : (...) bool
     """
     T = shear_intensity(trial)
-    sigma_y = sigma_y0 + H * peps
+    sigma_y = sigma_y0 + H * alpha
     yielding = SQRT3 * T > sigma_y
     if not yielding.any():
-        return trial, peps, yielding
+        return trial, alpha, np.zeros_like(trial), yielding
     eq = SQRT3 * T
-    dpeps = np.where(yielding, (eq - sigma_y) / (3 * mu + H), 0.0)
-    scale = np.where(yielding, 1.0 - 3 * mu * dpeps / np.where(yielding, eq, 1.0), 1.0)
+    dalpha = np.where(yielding, (eq - sigma_y) / (3 * mu + H), 0.0)
+    scale = np.where(yielding, 1.0 - 3 * mu * dalpha / np.where(yielding, eq, 1.0), 1.0)
     mean = trial[..., :3].mean(axis=-1, keepdims=True)
     sigma = trial * scale[..., None]
     sigma[..., :3] += mean * (1.0 - scale[..., None])  # the mean stress is left alone
-    return sigma, peps + dpeps, yielding
+    # the deviator lost is 2 mu d_eps_p (tensor components; shears doubled for engineering)
+    deps_p = (trial - sigma) / (2 * np.where(yielding, mu, 1.0))[..., None]
+    deps_p[..., 3:] *= 2.0
+    return sigma, alpha + dalpha, deps_p, yielding
+
+
+def intensity(eps_p: np.ndarray) -> np.ndarray:
+    """``sqrt(2/3 eps_p : eps_p)`` of Voigt strains with engineering shears (..., 6)."""
+    return np.sqrt(2.0 / 3.0 * ((eps_p[..., :3] ** 2).sum(-1) + 0.5 * (eps_p[..., 3:] ** 2).sum(-1)))

@@ -7,7 +7,7 @@ import pytest
 
 from cases import get_case
 from cases.material import lame
-from smfem.plasticity import shear_intensity, wilkins
+from smfem.plasticity import intensity, shear_intensity, wilkins
 from smfem.solver import solve
 
 
@@ -19,14 +19,15 @@ def uniaxial_strain_path(E, nu, sigma_y, E_T, strains):
     D[:3, :3] = lam
     D[[0, 1, 2], [0, 1, 2]] += 2 * mu
     D[[3, 4, 5], [3, 4, 5]] = mu
-    sigma, peps, out = np.zeros(6), np.array(0.0), []
+    sigma, alpha, eps_p, out = np.zeros(6), np.array(0.0), np.zeros(6), []
     prev = 0.0
     for e in strains:
         d = np.zeros(6)
         d[0] = e - prev
         prev = e
-        sigma, peps, _ = wilkins(sigma + D @ d, peps, np.array(mu), sigma_y, H)
-        out.append((sigma[0], sigma[1], float(peps)))
+        sigma, alpha, deps_p, _ = wilkins(sigma + D @ d, alpha, np.array(mu), sigma_y, H)
+        eps_p = eps_p + deps_p
+        out.append((sigma[0], sigma[1], float(alpha), float(intensity(eps_p))))
     return np.array(out), lam, mu, H
 
 
@@ -37,7 +38,8 @@ def test_uniaxial_strain_follows_the_hardening_law_exactly(E_T):
     E, nu, sy = 10.5e6, 0.3, 24000.0
     strains = np.linspace(0, 0.02, 201)[1:]
     path, lam, mu, H = uniaxial_strain_path(E, nu, sy, E_T, strains)
-    s11, s22, peps = path.T
+    s11, s22, peps, peps_tensor = path.T
+    assert np.allclose(peps_tensor, peps, rtol=1e-12, atol=1e-18)  # proportional: intensity = accumulated
     eps_y = sy / (2 * mu)  # sigma_11 - sigma_22 = 2 mu eps in the elastic range
     plastic = strains > eps_y
     assert np.all(peps[~plastic] == 0)
@@ -48,10 +50,18 @@ def test_uniaxial_strain_follows_the_hardening_law_exactly(E_T):
     assert np.allclose(math.sqrt(3) * shear_intensity(voigt)[plastic], sy + H * peps[plastic], rtol=1e-12)
 
 
+def test_plastic_strain_intensity_falls_under_reversed_flow_while_hardening_does_not():
+    strains = np.concatenate([np.linspace(0, 0.01, 101)[1:], np.linspace(0.01, -0.004, 151)[1:]])
+    path, *_ = uniaxial_strain_path(10.5e6, 0.3, 24000.0, 0.21e6, strains)
+    alpha, peps = path[:, 2], path[:, 3]
+    assert np.all(np.diff(alpha) >= 0) and peps[-1] < peps[99] < alpha[-1]
+
+
 def test_wilkins_leaves_the_mean_stress_and_elastic_points_alone():
     rng = np.random.default_rng(2)
     trial = rng.normal(size=(50, 6)) * 1.2e8
-    sigma, peps, yielding = wilkins(trial, np.zeros(50), np.full(50, 8e10), 2.9e8, 0.0)
+    sigma, peps, deps_p, yielding = wilkins(trial, np.zeros(50), np.full(50, 8e10), 2.9e8, 0.0)
+    assert np.allclose(intensity(deps_p), peps)  # one step: the increment's intensity
     assert np.allclose(sigma[:, :3].mean(1), trial[:, :3].mean(1))
     assert np.allclose(sigma[~yielding], trial[~yielding])
     assert np.allclose(math.sqrt(3) * shear_intensity(sigma[yielding]), 2.9e8)
