@@ -50,12 +50,14 @@ class Model:
         comparison only)
     nonlinear : keep every mode the symmetry of the problem allows (plasticity couples them) and
         set up the x3 sample points for stresses
-    coupled_stiffness : assemble the off-diagonal stiffness blocks (a direct solve needs them;
-        the block-iterative solver takes the coupling from the stresses instead)
+
+    The off-diagonal stiffness blocks are assembled only on request
+    (:meth:`assemble_coupled_stiffness`): a direct solve needs them, the block-iterative solver
+    takes the coupling from the stresses instead.
     """
 
     def __init__(self, case, refine: int | None = None, harmonics: int | None = None, scheme: str = "moment",
-                 nonlinear: bool = False, coupled_stiffness: bool = True):
+                 nonlinear: bool = False):
         if scheme not in ("moment", "full"):
             raise ModelError(f"unknown element scheme {scheme!r}: 'moment' or 'full'")
         self.case = case
@@ -107,9 +109,19 @@ class Model:
         for (i, j) in self._integrals:
             if i != j:
                 Ti, Tj = self.systems[i].T, self.systems[j].T
-                Mij = (Ti.T @ sp.diags(self.full_mass(i, j)) @ Tj).tocsr()
-                Kij = (Ti.T @ self.full_stiffness(i, j) @ Tj).tocsr() if coupled_stiffness else None
-                self.coupling[i, j] = (Kij, Mij)
+                self.coupling[i, j] = (None, (Ti.T @ sp.diags(self.full_mass(i, j)) @ Tj).tocsr())
+
+    def coupled_nonzeros(self) -> int:
+        """Nonzeros of the whole coupled stiffness, estimated before assembling it: each
+        off-diagonal block has the pattern of its row's diagonal block."""
+        return sum(self.systems[i].K.nnz for i, _ in self.coupling) + sum(s.K.nnz for s in self.systems)
+
+    def assemble_coupled_stiffness(self) -> None:
+        """Fill the off-diagonal stiffness blocks ``K(lm)`` of ``coupling``."""
+        for (i, j), (K, M) in self.coupling.items():
+            if K is None:
+                Ti, Tj = self.systems[i].T, self.systems[j].T
+                self.coupling[i, j] = ((Ti.T @ self.full_stiffness(i, j) @ Tj).tocsr(), M)
 
     @staticmethod
     def _reachable(loaded: list[int], strength: np.ndarray, tol: float = 1e-12) -> list[int]:

@@ -11,6 +11,7 @@ import scipy.sparse as sp
 
 from . import element, fourier
 from .mesh import SectionMesh
+from .sampling import GAUSS_A, GAUSS_ETA, GAUSS_XI
 
 
 def locate(mesh: SectionMesh, point) -> tuple[int, float, float]:
@@ -60,8 +61,6 @@ class PlasticStrainProbes:
     """
 
     def __init__(self, model, probes):
-        from .sampling import GAUSS_A, GAUSS_ETA, GAUSS_XI
-
         self.names = [p.name for p in probes]
         self.targets = []
         period = 2 * np.pi if model.body == "ring" else model.length

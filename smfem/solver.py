@@ -43,17 +43,13 @@ def stacked(model: Model):
     Q, V0 = np.concatenate([s.Q for s in S]), np.concatenate([s.V0 for s in S])
     if not model.coupling:
         return sp.block_diag([s.K for s in S], format="csr"), np.concatenate([s.M for s in S]), Q, V0, offsets
+    model.assemble_coupled_stiffness()  # a missing block must never count as zero
     n = len(S)
     Kb = [[model.coupling[i, j][0] if (i, j) in model.coupling else None for j in range(n)] for i in range(n)]
     Mb = [[model.coupling[i, j][1] if (i, j) in model.coupling else None for j in range(n)] for i in range(n)]
     for i, s in enumerate(S):
         Kb[i][i], Mb[i][i] = s.K, sp.diags(s.M)
     return sp.bmat(Kb, format="csr"), sp.bmat(Mb, format="csr"), Q, V0, offsets
-
-
-def coupled_nonzeros(model: Model) -> int:
-    """Nonzeros the direct solve of the coupled system would factorize (before fill-in)."""
-    return sum(s.K.nnz for s in model.systems) + sum(k.nnz for k, _ in model.coupling.values() if k is not None)
 
 
 def solve(case, progress=None, with_fields: bool = True, direct: bool | None = None) -> RunResult:
@@ -72,13 +68,15 @@ def solve(case, progress=None, with_fields: bool = True, direct: bool | None = N
     cpu0 = time.process_time()
     plastic = case.material.plastic
     model = Model(case, nonlinear=plastic)
-    fits = bool(model.coupling) and coupled_nonzeros(model) <= DIRECT_MAX_NONZEROS
-    use_direct = fits if direct is None else (direct and bool(model.coupling))
-    if not plastic and not (model.coupling and not use_direct):
+    coupled = bool(model.coupling)
+    use_direct = coupled and (model.coupled_nonzeros() <= DIRECT_MAX_NONZEROS if direct is None else direct)
+    if use_direct:
+        model.assemble_coupled_stiffness()
+    if not plastic and (use_direct or not coupled):
         return _linear(case, model, progress, with_fields, cpu0)
     if not plastic:  # elastic but too large to factorize whole: the iterative path
-        model = Model(case, nonlinear=True, coupled_stiffness=False)
-    return _iterative(case, model, progress, with_fields, cpu0, use_direct and bool(model.coupling))
+        model = Model(case, nonlinear=True)
+    return _iterative(case, model, progress, with_fields, cpu0, use_direct)
 
 
 def _history(case, linear_names, linear_values, plastic_names=(), plastic_values=None):
@@ -122,8 +120,11 @@ def _iterative(case, model, progress, with_fields, cpu0, direct: bool) -> RunRes
     values, pvalues = np.empty((n + 1, len(linear))), np.empty((n + 1, len(plastic)))
     zero = [np.zeros_like(s.Q) for s in model.systems]
     u, v, a = solver.initial(zero, [s.V0 for s in model.systems])
-    record = lambda k: (values.__setitem__(k, probes.evaluate(np.concatenate(u), np.concatenate(v))),
-                        pvalues.__setitem__(k, pprobes.evaluate(solver.state.peps)))
+
+    def record(k):
+        values[k] = probes.evaluate(np.concatenate(u), np.concatenate(v))
+        pvalues[k] = pprobes.evaluate(solver.state.peps)
+
     record(0)
     snapshot_steps = {int(round(t / case.dt)): t for t in case.references.get("plastic_zone_times", ())}
     snapshots = []
