@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cases.geometry import PRISM, RING
+from cases.geometry import PRISM, RING, interval_fourier
 
 #: strain row -> basis type (0: psi1, 1: psi3)
 ROW_TYPE = np.array([0, 0, 0, 0, 1, 1])
@@ -66,6 +66,14 @@ def psi_squared_integrals(mode: Mode, body: str, length: float) -> tuple[float, 
     if mode.l > 0:
         return math.pi, math.pi
     return (2 * math.pi, 0.0) if mode.family == "c" else (0.0, 2 * math.pi)
+
+
+def psi_integrals(mode: Mode, body: str, length: float) -> tuple[float, float]:
+    """Exact ``(int psi1, int psi3)`` over the whole x3 range (the same bases as :func:`psi`)."""
+    whole = ((0.0, 2 * math.pi if body == RING else length),)
+    kinds = {"c": ("cos", "sin", 1.0), "s": ("sin", "cos", -1.0), "p": ("sin", "cos", 1.0)}[mode.family]
+    return (interval_fourier(whole, mode.l, kinds[0], body, length),
+            kinds[2] * interval_fourier(whole, mode.l, kinds[1], body, length))
 
 
 def absent_components(mode: Mode) -> tuple[int, ...]:

@@ -95,8 +95,7 @@ class BlockIterative:
         self.state = PointState(self.points.stress(u0), self.state.eps_p, self.state.alpha)
         force = [s.Q - self.points.force_of_mode(i, self.state.sigma) for i, s in enumerate(S)]
         if self.model.coupling:
-            M = sp.bmat([[sp.diags(s.M) if i == j else (self.model.coupling[i, j][1] if (i, j) in self.model.coupling else None)
-                          for j, _ in enumerate(S)] for i, s in enumerate(S)], format="csc")
+            M = self.model.mass_matrix().tocsc()
             a = np.split(sla.spsolve(M, np.concatenate(force)), np.cumsum([len(f) for f in force])[:-1])
         else:
             a = [f / s.M for f, s in zip(force, S)]

@@ -6,7 +6,7 @@ import numpy as np
 
 from cases.geometry import PRISM, RING, interval_fourier
 
-from .fourier import Mode, psi_squared_integrals
+from .fourier import Mode, psi_integrals, psi_squared_integrals
 from .mesh import SectionMesh
 
 
@@ -54,20 +54,17 @@ def load_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode, np
 
 
 def velocity_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode, np.ndarray]:
-    """Initial velocity amplitudes (3 n_nodes,): the projection of a uniform velocity."""
+    """Initial velocity amplitudes (3 n_nodes,): the projection ``int v psi / int psi^2`` of a
+    uniform velocity on each mode."""
     out = {}
     for mode in modes:
         V = np.zeros((mesh.n_nodes, 3))
+        integral = psi_integrals(mode, case.body, case.length)
+        norm = psi_squared_integrals(mode, case.body, case.length)
         for iv in case.initial_velocity:
             c = iv.component - 1
             which = 0 if c < 2 else 1
-            norm = psi_squared_integrals(mode, case.body, case.length)[which]
-            if norm == 0:
-                continue
-            fam = ("sin" if mode.family in "sp" else "cos") if c < 2 else ("cos" if mode.family in "sp" else "sin")
-            integral = interval_fourier(((0.0, case.length),), mode.l, fam, case.body, case.length)
-            if mode.family == "s" and c == 2:
-                integral = -integral  # u3 ~ -cos in the ring's sine family
-            V[:, c] += iv.value * integral / norm
+            if norm[which]:
+                V[:, c] += iv.value * integral[which] / norm[which]
         out[mode] = V.ravel()
     return out

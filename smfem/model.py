@@ -111,6 +111,16 @@ class Model:
                 Ti, Tj = self.systems[i].T, self.systems[j].T
                 self.coupling[i, j] = (None, (Ti.T @ sp.diags(self.full_mass(i, j)) @ Tj).tocsr())
 
+    def mass_matrix(self):
+        """Stacked mass of all modes: the diagonal (n,) when the modes decouple, else the sparse
+        block matrix with the mass coupling rho(lm)."""
+        S = self.systems
+        if not self.coupling:
+            return np.concatenate([s.M for s in S])
+        blocks = [[sp.diags(s.M) if i == j else (self.coupling[i, j][1] if (i, j) in self.coupling else None)
+                   for j in range(len(S))] for i, s in enumerate(S)]
+        return sp.bmat(blocks, format="csr")
+
     def coupled_nonzeros(self) -> int:
         """Nonzeros of the whole coupled stiffness, estimated before assembling it: each
         off-diagonal block has the pattern of its row's diagonal block."""

@@ -42,14 +42,13 @@ def stacked(model: Model):
     offsets = np.cumsum([0] + [s.K.shape[0] for s in S])
     Q, V0 = np.concatenate([s.Q for s in S]), np.concatenate([s.V0 for s in S])
     if not model.coupling:
-        return sp.block_diag([s.K for s in S], format="csr"), np.concatenate([s.M for s in S]), Q, V0, offsets
+        return sp.block_diag([s.K for s in S], format="csr"), model.mass_matrix(), Q, V0, offsets
     model.assemble_coupled_stiffness()  # a missing block must never count as zero
     n = len(S)
     Kb = [[model.coupling[i, j][0] if (i, j) in model.coupling else None for j in range(n)] for i in range(n)]
-    Mb = [[model.coupling[i, j][1] if (i, j) in model.coupling else None for j in range(n)] for i in range(n)]
     for i, s in enumerate(S):
-        Kb[i][i], Mb[i][i] = s.K, sp.diags(s.M)
-    return sp.bmat(Kb, format="csr"), sp.bmat(Mb, format="csr"), Q, V0, offsets
+        Kb[i][i] = s.K
+    return sp.bmat(Kb, format="csr"), model.mass_matrix(), Q, V0, offsets
 
 
 def solve(case, progress=None, with_fields: bool = True, direct: bool | None = None) -> RunResult:
