@@ -1,4 +1,4 @@
-"""Command line (CONTRACT.md): ``smfem cases | run``.
+"""Command line (CONTRACT.md): ``smfem cases | run | study | report``.
 
 User mistakes end with one line on stderr and exit status 2; a run that fails to converge ends
 with exit status 3 after writing the history up to the last converged step.
@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 from cases import CASES, ParameterError, UnsupportedCase, get_case, parse_sets
+from reports.cli import add_commands, run_command
 
 EXIT_USAGE, EXIT_NOT_CONVERGED = 2, 3
 
@@ -38,6 +39,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", default=None, help="output directory (default: out/CASE-SOLVER)")
     run.add_argument("--no-fields", action="store_true", help="do not write fields.vtu")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_commands(sub)
     return p
 
 
@@ -110,7 +112,7 @@ def main(argv=None) -> int:
         if args.command == "cases":
             print(list_cases())
             return 0
-        return run(args)
+        return run(args) if args.command == "run" else run_command(args)
     except (UsageError, ParameterError, UnsupportedCase) as exc:
         print(f"smfem: error: {exc}", file=sys.stderr)
         return EXIT_USAGE

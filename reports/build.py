@@ -1,0 +1,82 @@
+"""Build a study's outputs: tables, figures, and (for the report) index.html and report.pdf."""
+
+from __future__ import annotations
+
+import shutil
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import figures
+from .analysis import CaseAnalysis, analyse
+from .cache import RunCache
+from .document import render_html, write_pdf
+from .sections import ReportContext, build_sections
+from .study import StudyResult, run_study
+from .tables import write_tables
+from .view3d import render_field
+
+TITLE = "SMFEM verification report"
+
+
+@dataclass
+class Report:
+    out: Path
+    study: StudyResult
+    analyses: list[CaseAnalysis]
+    tables: dict
+    figures: dict
+    wall_time_s: float
+
+
+def case_figures(an: CaseAnalysis, out: Path) -> dict[str, str]:
+    """Draw (or copy) the case's figures and fields file; paths relative to ``out``."""
+    name, made = an.case.name, {}
+    (out / "figures").mkdir(parents=True, exist_ok=True)
+    if not an.available:
+        return made
+    made["work_precision"] = f"figures/{name}-work-precision.png"
+    figures.work_precision(an, out / made["work_precision"])
+    made["histories"] = f"figures/{name}-histories.png"
+    figures.histories(an, out / made["histories"])
+    run = an.runs.fields
+    if run is not None and run.path is not None:
+        if (run.path / "plastic_zones.png").exists():
+            made["plastic_zones"] = f"figures/{name}-plastic-zones.png"
+            shutil.copyfile(run.path / "plastic_zones.png", out / made["plastic_zones"])
+        if (run.path / "fields.vtu").exists():
+            made["vtu"] = f"fields/{name}-smfem.vtu"
+            (out / "fields").mkdir(exist_ok=True)
+            shutil.copyfile(run.path / "fields.vtu", out / made["vtu"])
+            made["field"] = f"figures/{name}-field.png"
+            render_field(out / made["vtu"], out / made["field"], f"{name} (SMFEM)")
+    return made
+
+
+def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = None, workers: int = 2,
+          progress: bool = True, settings: str = "quick", document: bool = True) -> Report:
+    """Run (or reuse) the plan's runs and write ``tables/*.csv``, ``figures/``, ``fields/`` and,
+    with ``document``, ``index.html`` and ``report.pdf`` into ``out``.
+
+    Parameters
+    ----------
+    plan : case studies (:mod:`reports.plan`)
+    out : output directory
+    cache : run cache directory (default ``out/runs``)
+    scheduler : dask.distributed scheduler address; None: ``workers`` local processes
+    settings : the plan's name, shown in the report
+    """
+    wall0 = time.perf_counter()
+    out = Path(out)
+    study = run_study(plan, RunCache(cache or out / "runs"), scheduler, workers, progress)
+    analyses = [analyse(cr) for cr in study.cases]
+    tables = write_tables(analyses, out / "tables")
+    figs = {an.case.name: case_figures(an, out) for an in analyses}
+    if document:
+        ctx = ReportContext(analyses, tables, figs, study, settings, out)
+        subtitle = (f"{settings} settings; cases: {', '.join(an.case.name for an in analyses)}; "
+                    f"built by `smfem report`")
+        html = render_html(build_sections(ctx), TITLE, subtitle)
+        (out / "index.html").write_text(html, encoding="utf-8")
+        write_pdf(html, out / "report.pdf", out)
+    return Report(out, study, analyses, tables, figs, time.perf_counter() - wall0)

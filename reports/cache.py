@@ -1,0 +1,117 @@
+"""Finished runs on disk, keyed by case, resolved parameters, solver and code version.
+
+A run's directory holds what ``smfem run`` writes (``history.csv``, ``summary.json``, maybe
+``fields.vtu`` and ``plastic_zones.png``) and ``job.json`` (the key's ingredients and the
+outcome). The code version is a hash of the sources a solver's results depend on, so editing
+the reference solver does not throw away SMFEM runs, and the other way round.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib.util
+import json
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from cases import get_case
+
+from .jobs import FAILED, Job, Outcome
+from .plan import SMFEM
+
+#: packages whose source decides a solver's results
+SOURCES = {SMFEM: ("smfem", "cases"), "reference": ("reference_fem", "cases")}
+
+
+@functools.cache
+def code_version(solver: str) -> str:
+    """sha256 (16 hex digits) of the ``.py`` files of the packages ``solver`` depends on."""
+    h = hashlib.sha256()
+    for package in SOURCES[SMFEM if solver == SMFEM else "reference"]:
+        root = Path(importlib.util.find_spec(package).submodule_search_locations[0])
+        for path in sorted(root.rglob("*.py")):
+            h.update(str(path.relative_to(root)).encode())
+            h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def key_of(job: Job) -> dict:
+    """What identifies a run: the resolved parameters, not the overrides that led to them."""
+    return {"case": job.case, "solver": job.solver, "params": job.build().params, "fields": job.fields,
+            "version": code_version(job.solver)}
+
+
+@dataclass
+class Run:
+    """A finished (or refused) run as the report reads it."""
+
+    job: Job
+    status: str
+    message: str
+    path: Path | None
+    history: pd.DataFrame | None = None
+    summary: dict | None = None
+
+    @property
+    def label(self) -> str:
+        """``r2 H40`` (refine, SMFEM harmonics), with ``dt`` when it is not the case's default."""
+        p = self.summary["params"] if self.summary else dict(self.job.overrides)
+        default_dt = get_case(self.job.case).params["dt"]
+        text = f"r{p.get('refine', 1)}" + (f" H{p.get('harmonics')}" if self.job.solver == SMFEM else "")
+        return text + (f" dt{p['dt']:g}" if p.get("dt", default_dt) != default_dt else "")
+
+    @property
+    def usable(self) -> bool:
+        """A history to compare (a run that stopped early still has its converged steps)."""
+        return self.history is not None and len(self.history) > 1
+
+
+class RunCache:
+    """Directory ``root/CASE/SOLVER/KEY`` per run."""
+
+    def __init__(self, root: Path):
+        self.root = Path(root)
+
+    def path(self, job: Job) -> Path:
+        key = key_of(job)
+        digest = hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()[:20]
+        return self.root / job.case / job.solver / digest
+
+    def load(self, job: Job) -> Run | None:
+        """The stored run of ``job``, or None if it has not run with this code version."""
+        path = self.path(job)
+        meta = path / "job.json"
+        if not meta.exists():
+            return None
+        record = json.loads(meta.read_text())
+        return _read(job, record["status"], record["message"], path)
+
+    def store(self, job: Job, outcome: Outcome) -> Run:
+        """Write ``outcome`` atomically (a crash leaves no half run); a failure is not kept,
+        so the next build tries again."""
+        if outcome.status == FAILED:
+            return Run(job, outcome.status, outcome.message, None)
+        path = self.path(job)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(dir=path.parent, prefix=".partial-"))
+        for name, data in (outcome.files or {}).items():
+            (tmp / name).write_bytes(data)
+        record = {"key": key_of(job), "overrides": dict(job.overrides), "status": outcome.status,
+                  "message": outcome.message}
+        (tmp / "job.json").write_text(json.dumps(record, indent=2, default=str))
+        if path.exists():
+            shutil.rmtree(path)
+        os.replace(tmp, path)
+        return _read(job, outcome.status, outcome.message, path)
+
+
+def _read(job: Job, status: str, message: str, path: Path) -> Run:
+    history = pd.read_csv(path / "history.csv") if (path / "history.csv").exists() else None
+    summary = json.loads((path / "summary.json").read_text()) if (path / "summary.json").exists() else None
+    return Run(job, status, message, path, history, summary)

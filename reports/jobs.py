@@ -1,0 +1,94 @@
+"""One run of a study: what to run (:class:`Job`) and running it (:func:`execute`).
+
+:func:`execute` is what a worker process or a dask worker calls. It returns the files that
+``smfem run`` would write, as bytes, so the client stores them: workers need not share a disk.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+import traceback
+from dataclasses import dataclass
+from pathlib import Path
+
+from cases import UnsupportedCase, get_case
+
+from .plan import REF3D, SMFEM
+
+OK, NOT_CONVERGED, NOT_AVAILABLE, FAILED = "ok", "not converged", "not available", "failed"
+
+
+@dataclass(frozen=True)
+class Job:
+    """A case with overrides, run by one solver (``smfem``, ``reference-2d``, ``reference-3d``).
+
+    ``overrides`` is a sorted tuple of ``(key, value)`` so that a job can be hashed; ``fields``
+    asks an SMFEM run for ``fields.vtu`` (and plastic zones, which plastic runs always draw).
+    """
+
+    case: str
+    solver: str
+    overrides: tuple
+    fields: bool = False
+
+    @classmethod
+    def make(cls, case: str, solver: str, overrides: dict, fields: bool = False) -> Job:
+        if solver != SMFEM:
+            overrides = dict(overrides, dim=3 if solver == REF3D else 2)
+        return cls(case, solver, tuple(sorted(overrides.items())), fields and solver == SMFEM)
+
+    def build(self):
+        """The case with the resolved parameters (raises ParameterError on a bad override)."""
+        return get_case(self.case, dict(self.overrides))
+
+    def describe(self) -> str:
+        sets = " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in self.overrides)
+        return f"{self.case} {self.solver} {sets}".strip()
+
+
+@dataclass
+class Outcome:
+    """What came back from a worker: status, a message, and the run's files by name."""
+
+    status: str
+    message: str = ""
+    files: dict | None = None
+
+
+def _solve(job: Job, case):
+    if job.solver == SMFEM:
+        from smfem.solver import solve
+
+        return solve(case, with_fields=job.fields)
+    from reference_fem import solve
+
+    result = solve(case)
+    result.mesh = None  # the report shows SMFEM's synthesized field; a 3-D reference mesh is large
+    return result
+
+
+def execute(job: Job) -> Outcome:
+    """Run ``job`` as ``smfem run`` would and return its files.
+
+    A solver that cannot represent the case (:class:`cases.UnsupportedCase`) gives
+    ``not available``; any other exception gives ``failed`` with the traceback's last line, so
+    that one broken run does not lose a long study.
+    """
+    from smfem.output import write_run
+
+    case = job.build()
+    wall0 = time.perf_counter()
+    try:
+        result = _solve(job, case)
+    except UnsupportedCase as exc:
+        return Outcome(NOT_AVAILABLE, str(exc))
+    except Exception as exc:  # noqa: BLE001 - reported per run, see the docstring
+        where = traceback.extract_tb(exc.__traceback__)[-1]
+        return Outcome(FAILED, f"{type(exc).__name__}: {exc} ({Path(where.filename).name}:{where.lineno})")
+    wall = time.perf_counter() - wall0
+    with tempfile.TemporaryDirectory(prefix="smfem-job-") as tmp:
+        out = Path(tmp)
+        write_run(out, case, "smfem" if job.solver == SMFEM else "reference", result, wall)
+        files = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+    return Outcome(OK if result.converged else NOT_CONVERGED, result.message, files)

@@ -1,0 +1,202 @@
+"""The verification report (issue 6): a tiny study end to end, the cache, dask, the metrics."""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from cases import UnsupportedCase, get_case
+from reports import metrics
+from reports.analysis import analyse
+from reports.build import build
+from reports.cache import Run, RunCache
+from reports.jobs import NOT_AVAILABLE, Job, execute
+from reports.plan import REF2D, REF3D, SMFEM, CaseStudy, Series
+from reports.references import rod_histories
+from reports.study import CaseRuns
+from reports.tables import headline_table
+from smfem.cli import main
+
+#: a study of seconds: short windows, coarse meshes
+TINY = (
+    CaseStudy("dome", (
+        Series(SMFEM, ({"refine": 1}, {"refine": 2}, {"refine": 3})),
+        Series(REF2D, ({"refine": 1}, {"refine": 2})),
+        Series(REF3D, ({"refine": 1},)),
+    ), reference=(REF2D, {"refine": 4}), base={"t_end": 4e-5}),
+    CaseStudy("thick_cylinder", (
+        Series(SMFEM, ({"harmonics": 4}, {"harmonics": 10}, {"refine": 2, "harmonics": 20})),
+        Series(REF2D, ({"refine": 1},)),
+    ), reference=(REF2D, {"refine": 2}), base={"t_end": 4e-4}),
+)
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    out = tmp_path_factory.mktemp("report")
+    return build(TINY, out, workers=2, progress=False, settings="tiny")
+
+
+def test_tiny_report_has_a_figure_per_case_the_headline_and_the_tables(tiny):
+    out = tiny.out
+    for study in TINY:
+        assert (out / "figures" / f"{study.case}-work-precision.png").stat().st_size > 10_000
+        assert (out / "figures" / f"{study.case}-histories.png").exists()
+        assert (out / "fields" / f"{study.case}-smfem.vtu").exists()
+    for name in ("headline", "runs", "errors", "orders", "richardson", "published"):
+        assert (out / "tables" / f"{name}.csv").exists()
+    head = pd.read_csv(out / "tables" / "headline.csv")
+    assert len(head) == 5 and set(head.case) == {"dome", "thick_cylinder"}
+    assert head.reference.str.contains("finest reference FEM").all()
+    dome = head[head.case == "dome"].set_index("solver")
+    assert dome.loc[SMFEM, "best_error_pct"] < 5  # 4 x 20 against the 2D reference at refine 4
+    assert isinstance(dome.loc[REF2D, "smfem_speedup"], str)
+    runs = pd.read_csv(out / "tables" / "runs.csv")
+    assert (runs.status == "ok").all() and (runs.cpu_time_s > 0).all()
+
+
+def test_dome_orders_and_published_extrema_are_tabulated(tiny):
+    orders = pd.read_csv(tiny.out / "tables" / "orders.csv")
+    smfem = orders[(orders.case == "dome") & (orders.solver == SMFEM)].iloc[0]
+    assert smfem.h == "1/refine" and smfem.levels == 3 and 1.0 < smfem.order_max < 3.5
+    published = pd.read_csv(tiny.out / "tables" / "published.csv")
+    assert set(published.probe) == {"apex_uz"}  # the window ends before the first extremum: NaN
+    assert published.found.isna().all()
+
+
+def test_html_is_self_contained_and_the_pdf_has_pages_and_text(tiny):
+    from pypdf import PdfReader
+
+    html = (tiny.out / "index.html").read_text()
+    assert html.count('src="data:image/png;base64,') >= 4 and 'src="figures/' not in html
+    assert "Headline" in html and 'href="fields/dome-smfem.vtu"' in html
+    pdf = PdfReader(tiny.out / "report.pdf")
+    assert len(pdf.pages) >= 3
+    text = " ".join(page.extract_text() for page in pdf.pages)
+    for needle in ("SMFEM verification report", "Headline", "dome", "thick_cylinder", "work-precision"):
+        assert needle in text
+
+
+def test_a_rebuilt_report_runs_nothing_new(tiny, tmp_path):
+    again = build(TINY, tmp_path / "again", cache=tiny.out / "runs", progress=False, document=False)
+    assert again.study.executed == [] and again.study.cached == tiny.study.cached + len(tiny.study.executed)
+    first = pd.read_csv(tiny.out / "tables" / "errors.csv")
+    second = pd.read_csv(tmp_path / "again" / "tables" / "errors.csv")
+    pd.testing.assert_frame_equal(first, second)
+
+
+def test_study_on_a_dask_local_cluster_matches_the_local_processes(tiny, tmp_path):
+    from distributed import LocalCluster
+
+    plan = (CaseStudy("dome", (Series(SMFEM, ({"refine": 1}, {"refine": 2})),),
+                      reference=(REF2D, {"refine": 4}), base={"t_end": 4e-5}),)
+    with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
+        report = build(plan, tmp_path, scheduler=cluster.scheduler_address, progress=False, document=False)
+    assert len(report.study.executed) == 3
+    mine = report.analyses[0].runs.series[SMFEM][1].history
+    local = tiny.analyses[0].runs.series[SMFEM][1].history
+    np.testing.assert_allclose(mine.to_numpy(), local.to_numpy(), rtol=1e-12, atol=1e-15)
+
+
+def _chromium():
+    return next((c for c in ("chromium", "chromium-browser", "google-chrome") if shutil.which(c)), None)
+
+
+@pytest.mark.skipif(_chromium() is None, reason="no Chromium on this machine (Debian package 'chromium')")
+def test_html_renders_in_headless_chromium(tiny, tmp_path):
+    shot = tmp_path / "report.png"
+    subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                    "--disable-background-networking", f"--user-data-dir={tmp_path / 'profile'}",
+                    f"--screenshot={shot}", "--window-size=1200,2400", (tiny.out / "index.html").as_uri()],
+                   check=True, timeout=120, capture_output=True)
+    assert shot.stat().st_size > 20_000
+
+
+def test_a_solver_that_cannot_run_a_case_gives_not_available(monkeypatch, tmp_path):
+    import smfem.solver
+
+    def refuse(case, **_):
+        raise UnsupportedCase("contact is not part of this version")
+
+    monkeypatch.setattr(smfem.solver, "solve", refuse)
+    job = Job.make("rod_impact", SMFEM, {"t_end": 2e-6})
+    outcome = execute(job)
+    assert outcome.status == NOT_AVAILABLE and "contact" in outcome.message
+    cache = RunCache(tmp_path)
+    run = cache.store(job, outcome)
+    assert cache.load(job).status == NOT_AVAILABLE
+    study = CaseStudy("rod_impact", (Series(SMFEM, ({},)),), reference=(REF2D, {}))
+    refused = Run(Job.make("rod_impact", REF2D, {}), NOT_AVAILABLE, "no contact", None)
+    an = analyse(CaseRuns(study, {SMFEM: [run]}, refused, run))
+    row = headline_table([an]).iloc[0]
+    assert not an.available and row.reference == "none available"
+    assert row["cpu_s_to_1pct"].startswith("not available")
+
+
+def test_study_command_writes_tables_and_figures_from_the_cache(tiny, tmp_path, monkeypatch, capsys):
+    import reports.cli
+
+    monkeypatch.setattr(reports.cli, "quick", lambda: TINY)
+    out = tmp_path / "study"
+    assert main(["study", "dome", "--out", str(out), "--cache", str(tiny.out / "runs"), "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    assert "0 runs executed" in printed and "reference-3d" in printed
+    assert (out / "figures" / "dome-work-precision.png").exists() and not (out / "index.html").exists()
+    assert set(pd.read_csv(out / "tables" / "headline.csv").case) == {"dome"}
+
+
+def test_user_mistakes_in_report_commands_exit_2(tmp_path, capsys):
+    assert main(["study", "no_such_case", "--out", str(tmp_path / "s")]) == 2
+    assert main(["report", "--workers", "0", "--out", str(tmp_path / "r")]) == 2
+    assert main(["report", "--quick", "--full"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and "no_such_case" in err[0] and "--workers" in err[1]
+    assert not (tmp_path / "s").exists() and not (tmp_path / "r").exists()
+
+
+def test_history_errors_of_a_shifted_sine():
+    t = np.linspace(0, 1, 2001)
+    b = np.sin(2 * np.pi * t)
+    e_max, e_l2 = metrics.history_errors(t, 1.01 * b, t, b)
+    assert e_max == pytest.approx(0.01) and e_l2 == pytest.approx(0.01)
+    coarse = t[::10]  # another time step: interpolated to the reference's times
+    e_max, _ = metrics.history_errors(coarse, np.sin(2 * np.pi * coarse), t, b)
+    assert e_max < 2e-3
+
+
+def test_observed_order_and_richardson_with_uneven_levels():
+    h = np.array([1.0, 1 / 2, 1 / 3, 1 / 5])
+    q = 2.0 + 0.3 * h**2
+    assert metrics.observed_order(h, q - 2.0) == pytest.approx(2.0)
+    fit = metrics.richardson(h, q)
+    assert fit.order == pytest.approx(2.0, rel=1e-6) and fit.q_star == pytest.approx(2.0, rel=1e-9)
+    assert metrics.richardson(h, [1.0, 2.0, 1.5, 1.7]) is None  # differences change sign
+
+
+def test_time_to_tolerance_and_speedups():
+    cost = metrics.time_to_tolerance([1.0, 10.0], [0.1, 0.001])  # log-log halfway
+    assert cost.how == "interpolated" and cost.hi == pytest.approx(math.sqrt(10.0))
+    below = metrics.time_to_tolerance([2.0, 4.0], [0.005, 0.001])
+    never = metrics.time_to_tolerance([2.0, 4.0], [0.5, 0.1])
+    assert (below.how, below.text()) == ("coarsest", "<= 2")
+    assert never.how == "not reached" and never.text() == "not reached (best 10 %)"
+    exact = metrics.time_to_tolerance([0.1, 1.0], [0.1, 0.001])
+    assert metrics.speedup(cost, exact) == f"{math.sqrt(10.0) / math.sqrt(0.1):.3g}x"
+    assert metrics.speedup(never, exact).startswith("> ") and metrics.speedup(below, exact).startswith("< ")
+
+
+def test_rod_theory_histories():
+    case = get_case("rod_impact", {"nu": 0.0, "gap": 0.0})
+    theory = case.references["rod_theory"]
+    t = np.linspace(0, case.t_end, 6001)
+    h = rod_histories(theory, t)
+    c, (t0, t1) = theory["c"], theory["t_contact"]
+    assert h["rod_vz"][0] == -5.0 and h["rod_vz"][-1] == 5.0
+    assert h["mid_szz"][np.searchsorted(t, 0.4 / c)] == 0.0
+    assert h["mid_szz"][np.searchsorted(t, 1.0 / c)] == pytest.approx(theory["stress"])
+    assert h["end_uz"][t < t1].max() == 0.0 and h["end_uz"][-1] == pytest.approx(5.0 * (t[-1] - t1))
