@@ -69,9 +69,9 @@ class BlockIterative:
             self.coupled_lu = None
         else:
             # the whole coupled elastic K + a0 M as the iteration matrix: all harmonics at once
-            K, M = coupled
-            self.coupled_lu = sla.splu((K + self.c.a0 * M).tocsc())
-            self.offsets = np.cumsum([0] + [s.K.shape[0] for s in S])
+            K, self.M = coupled
+            self.coupled_lu = sla.splu((K + self.c.a0 * self.M).tocsc())
+            self.Q = np.concatenate([s.Q for s in S])
         self.factorizations = len(S) if coupled is None else 1
         self.mass_coupling = {i: [(j, m[1]) for (a, j), m in model.coupling.items() if a == i] for i in range(len(S))}
         mat = model.case.material
@@ -93,12 +93,11 @@ class BlockIterative:
         """Displacements, velocities and accelerations at t = 0 from ``M a = Q - R(u0)``."""
         S = self.model.systems
         self.state = PointState(self.points.stress(u0), self.state.eps_p, self.state.alpha)
-        force = [s.Q - self.points.force_of_mode(i, self.state.sigma) for i, s in enumerate(S)]
+        force = np.concatenate([s.Q for s in S]) - self.points.forces(self.state.sigma)
         if self.model.coupling:
-            M = self.model.mass_matrix().tocsc()
-            a = np.split(sla.spsolve(M, np.concatenate(force)), np.cumsum([len(f) for f in force])[:-1])
+            a = np.split(sla.spsolve(self.model.mass_matrix().tocsc(), force), self.points.offsets[1:-1])
         else:
-            a = [f / s.M for f, s in zip(force, S)]
+            a = np.split(force / np.concatenate([s.M for s in S]), self.points.offsets[1:-1])
         return [u.copy() for u in u0], [v.copy() for v in v0], a
 
     def step(self, u, v, a, step_index: int, t: float):
@@ -112,13 +111,14 @@ class BlockIterative:
             change2 = 0.0
             if self.coupled_lu is not None:
                 t0 = tick()
-                r = [s.Q - pts.force_of_mode(i, sigma) - self.inertia(i, new, predicted) for i, s in enumerate(S)]
+                x, p = np.concatenate(new), np.concatenate(predicted)
+                r = self.Q - pts.forces(sigma) - c.a0 * (self.M @ (x - p))
                 t1 = tick()
-                du = np.split(self.coupled_lu.solve(np.concatenate(r)), self.offsets[1:-1])
+                du = self.coupled_lu.solve(r)
                 self.timings["projection"] += t1 - t0
                 self.timings["solves"] += tick() - t1
-                new = [x + d for x, d in zip(new, du)]
-                change2 = sum(d @ d for d in du)
+                new = np.split(x + du, pts.offsets[1:-1])
+                change2 = du @ du
             for i, s in enumerate(S if self.coupled_lu is None else ()):
                 t0 = tick()
                 r = s.Q - pts.force_of_mode(i, sigma) - self.inertia(i, new, predicted)
@@ -133,7 +133,7 @@ class BlockIterative:
                 self.timings["synthesis"] += t3 - t2
                 change2 += du @ du
             t0 = tick()
-            trial = self.state.sigma + pts.stress([x - y for x, y in zip(new, u)])
+            trial = self.state.sigma + pts.stress(np.concatenate(new) - np.concatenate(u))
             t1 = tick()
             if self.plastic:
                 sigma, alpha, deps_p, _ = wilkins(trial, self.state.alpha, self.mu, self.sigma_y0, self.H)

@@ -45,7 +45,8 @@ def _jsonable(x):
 
 
 def write_run(out: Path, case, solver: str, result, wall_time_s: float) -> None:
-    """Write history.csv (one row per computed step, t = 0 included), summary.json, fields.vtu."""
+    """Write history.csv (one row per computed step, t = 0 included), summary.json, fields.vtu,
+    and for plastic runs plastic_zones.png with its data plastic_zones.npz."""
     out.mkdir(parents=True, exist_ok=True)
     n = len(result.iterations) + 1
     table = pd.DataFrame({"t": result.t[:n], **{k: v[:n] for k, v in result.history.items()}})
@@ -55,5 +56,7 @@ def write_run(out: Path, case, solver: str, result, wall_time_s: float) -> None:
         result.mesh.write(out / "fields.vtu")
     if getattr(result, "snapshots", None):
         from .plots import plastic_zones
+        from .zones import save
 
-        plastic_zones(result.snapshots, out / "plastic_zones.png", f"{case.name} ({solver}): plastic zones")
+        save(result.snapshots, out / "plastic_zones.npz")
+        plastic_zones({solver: result.snapshots}, out / "plastic_zones.png", f"{case.name}: plastic zones")

@@ -23,9 +23,10 @@ from .model import Model, ModelError
 from .newmark import LinearNewmark
 from .probes import PlasticStrainProbes, ProbeSet
 from .result import RunResult
+from .zones import smfem_snapshot
 
 #: the largest coupled system factorized directly (nonzeros of K + a0 M)
-DIRECT_MAX_NONZEROS = 4_000_000
+DIRECT_MAX_NONZEROS = 40_000_000
 #: relaxation of the block SOR (see the omega study in benchmarks/)
 OMEGA = 1.0
 #: iterations allowed per step before a run stops as not converged
@@ -62,10 +63,14 @@ def solve(case, progress=None, with_fields: bool = True, direct: bool | None = N
     direct : force (True) or forbid (False) the direct coupled solve of an elastic
         inhomogeneous case; None lets the solver choose by size
     """
-    if case.wall is not None:
-        raise ModelError(f"{case.name}: contact is not part of this version")
     cpu0 = time.process_time()
     plastic = case.material.plastic
+    if case.wall is not None:
+        if plastic:
+            raise ModelError(f"{case.name}: contact with plasticity is not supported: set plastic=false")
+        from .contact_run import solve_contact
+
+        return solve_contact(case, Model(case), progress, with_fields, cpu0)
     model = Model(case, nonlinear=plastic)
     coupled = bool(model.coupling)
     use_direct = coupled and (model.coupled_nonzeros() <= DIRECT_MAX_NONZEROS if direct is None else direct)
@@ -137,9 +142,7 @@ def _iterative(case, model, progress, with_fields, cpu0, direct: bool) -> RunRes
         iterations.append(its)
         record(k)
         if k in snapshot_steps and case.material.plastic:
-            snapshots.append({"t": k * case.dt, "peps": solver.state.peps.mean(axis=1), "x3": model.x3,
-                              "element_x": model.mesh.element_x(), "body": case.body, "length": case.length,
-                              "axisymmetric": case.axisymmetric})
+            snapshots.append(smfem_snapshot(k * case.dt, model, case, solver.state.peps))
         if progress:
             progress(k, n)
     done = len(iterations) + 1

@@ -1,6 +1,7 @@
-"""SMFEM against the independent reference FEM (2D), elastic runs at converged settings.
+"""SMFEM against the independent reference FEM (2D) at converged settings.
 
-Error: relative max-norm over the window, max|a - b| / max|b|, per displacement probe.
+Error: relative max-norm over the window, max|a - b| / max|b|, per displacement probe; for
+plastic-strain probes the relative difference of the peaks (``smfem.compare.probe_error``).
 """
 
 import numpy as np
@@ -8,6 +9,7 @@ import pytest
 
 from cases import get_case
 from reference_fem import solve as reference
+from smfem.compare import probe_error
 from smfem.solver import solve as smfem
 
 
@@ -24,6 +26,8 @@ def error(a, b):
         ("thick_cylinder", {"refine": 4, "harmonics": 80}, {"refine": 3}),
         # measured: 1.78 %; the 10 mm notch needs many harmonics (3.4 % static at 80)
         ("notched_strip", {"plastic": False, "harmonics": 120}, {"plastic": False, "refine": 2}),
+        # measured: D 1.14 %, E 1.49 %, F 1.14 % (SMFEM at the paper's 14 x 20: 2.6-3.3 %)
+        ("notched_cylinder", {"plastic": False, "refine": 2, "harmonics": 40}, {"plastic": False, "refine": 2}),
     ],
 )
 def test_elastic_displacement_probes_within_two_percent(name, smfem_sets, reference_sets):

@@ -1,0 +1,55 @@
+"""Plastic-zone snapshots: cells in the plotting plane and their equivalent plastic strain.
+
+A snapshot is ``{"t": time, "poly": (n, 4, 2) cell corners, "peps": (n,) cell values}`` in
+the plane both solvers draw in: the x-y plane of a ring, the (r, z) half-plane of an
+axisymmetric ring, the (span, height) plane of a prism. :func:`smfem.plots.plastic_zones`
+draws any solver's snapshots the same way.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def smfem_snapshot(t: float, model, case, peps: np.ndarray) -> dict:
+    """Snapshot of SMFEM's ``peps`` (elements, section points, x3 points), element means.
+
+    Each element is drawn once per x3 quadrature point as the x3 slice around that point;
+    an axisymmetric section shows the largest value along x3 (they are all equal).
+    """
+    X, x3, value = model.mesh.element_x(), model.x3, peps.mean(axis=1)  # (ne, 4, 2), (nq,), (ne, nq)
+    if case.body == "ring" and case.axisymmetric:
+        return {"t": t, "poly": X, "peps": value.max(axis=1)}
+    lo1, hi1 = X[:, :, 0].min(1), X[:, :, 0].max(1)
+    lo2, hi2 = X[:, :, 1].min(1), X[:, :, 1].max(1)
+    period = 2 * math.pi if case.body == "ring" else case.length
+    mid = 0.5 * (x3[1:] + x3[:-1])
+    edges = np.concatenate([[0.0], mid, [period]])
+    a, b = edges[:-1], edges[1:]
+    if case.body == "ring":  # a plane section: wedges in x-y
+        r0, r1 = lo1[:, None], hi1[:, None]
+        ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
+        poly = np.stack([np.stack([r0 * ca, r0 * sa], -1), np.stack([r1 * ca, r1 * sa], -1),
+                         np.stack([r1 * cb, r1 * sb], -1), np.stack([r0 * cb, r0 * sb], -1)], axis=2)
+    else:  # span x height
+        A, B = np.broadcast_to(a, (len(X), len(a))), np.broadcast_to(b, (len(X), len(b)))
+        z0, z1 = np.broadcast_to(lo2[:, None], A.shape), np.broadcast_to(hi2[:, None], A.shape)
+        poly = np.stack([np.stack([A, z0], -1), np.stack([B, z0], -1), np.stack([B, z1], -1),
+                         np.stack([A, z1], -1)], axis=2)
+    return {"t": t, "poly": poly.reshape(-1, 4, 2), "peps": value.ravel()}
+
+
+def save(snapshots: list[dict], path) -> None:
+    """Snapshots as one ``.npz`` (``t``, and ``poly_k``/``peps_k`` per snapshot k)."""
+    arrays = {"t": np.array([s["t"] for s in snapshots])}
+    for k, s in enumerate(snapshots):
+        arrays[f"poly_{k}"], arrays[f"peps_{k}"] = s["poly"], s["peps"]
+    np.savez_compressed(path, **arrays)
+
+
+def load(path) -> list[dict]:
+    """Snapshots written by :func:`save`."""
+    with np.load(path) as z:
+        return [{"t": float(t), "poly": z[f"poly_{k}"], "peps": z[f"peps_{k}"]} for k, t in enumerate(z["t"])]
