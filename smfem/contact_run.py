@@ -16,6 +16,9 @@ from .fields import field_mesh
 from .probes import ProbeSet
 from .result import RunResult
 
+#: relative energy gain over a run without loads beyond which the result is rejected
+ENERGY_GAIN_LIMIT = 0.01
+
 
 def _energy(stepper, layer, u, v, strain, state) -> float:
     """Kinetic + strain energy of the rod and the layer (per radian: the model's integrals)."""
@@ -69,6 +72,12 @@ def solve_contact(case, model, progress, with_fields, cpu0) -> RunResult:
         record(k)
         if progress:
             progress(k, n)
+    energy_after = _energy(stepper, layer, u, v, strain, state)
+    gain = energy_after / energy_before - 1 if energy_before > 0 else 0.0
+    if not message and not case.loads and gain > ENERGY_GAIN_LIMIT:
+        # nothing does work on the rod: energy can only stay or be dissipated by friction
+        message = (f"contact created energy: +{gain:.1%} over the run (a layer too stiff for dt chatters "
+                   f"unseen between steps): lower layer_stiffness or dt")
     done = len(iterations) + 1
     its = np.array(iterations or [0])
     window = [contact_steps[0] * case.dt, contact_steps[-1] * case.dt] if contact_steps else None
@@ -82,6 +91,6 @@ def solve_contact(case, model, progress, with_fields, cpu0) -> RunResult:
               "solve": "contact layer (17)-(19): states iterated per step, factorizations cached by state",
               "iterations_mean": float(its.mean()), "iterations_max": int(its.max()),
               "energy_before": energy_before,
-              "energy_after": _energy(stepper, layer, u, v, strain, state),
+              "energy_after": energy_after,
               "contact_window": window, "max_layer_compression": stepper.max_closure},
     )

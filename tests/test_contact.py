@@ -94,6 +94,13 @@ def test_chattering_states_are_reported():
     assert not r.converged and "chattering" in r.message
 
 
+def test_energy_created_by_a_too_stiff_layer_is_reported():
+    # E_l = 0.3 E: states switch unseen between steps and the rod leaves with far more energy
+    case, r = rod(nu=0.0, layer_stiffness=0.3)
+    assert not r.converged and "created energy" in r.message
+    assert r.info["energy_after"] > 1.5 * r.info["energy_before"]
+
+
 def test_contact_run_writes_the_contract_files(tmp_path):
     from smfem.cli import main
 
