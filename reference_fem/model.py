@@ -11,6 +11,7 @@ from cases.geometry import PRISM, RING
 
 from . import forms
 from .frames import AXISYMMETRIC, SOLID, in_intervals, section_of, x3_of
+from .mass import consistent_mass, redistributed_mass
 from .mesh import RefMesh, build_mesh
 
 #: Gauss rule: 3 points per direction, exact for the stiffness and the consistent mass of
@@ -28,7 +29,8 @@ class Model:
     B, weights : strain operator ``(n_qp * nc, n_dof)`` and weights ``(n_qp,)``
         (see :func:`reference_fem.forms.strain_operator`)
     x_qp : ndarray, ``(dim, n_qp)``, quadrature points in mesh coordinates
-    M : csr_matrix, consistent mass (kg, or kg per radian when axisymmetric)
+    M : csr_matrix, consistent mass (kg, or kg per radian when axisymmetric); with a wall, the
+        layer at the wall's face redistributed (:mod:`reference_fem.mass`)
     Q : ndarray, ``(n_dof,)``, load vector of the case's pressures (N; per radian if axisymmetric)
     fixed, free : ndarray of int, supported and free dof indices
     fix_rigid_body : for static solves of rings that are not axisymmetric (no support against
@@ -57,8 +59,10 @@ class Model:
         self.x_qp = np.asarray(self.basis.global_coordinates()).reshape(self.dim, -1)
         self.lam, self.mu = case.material.lame
         self.D = forms.elastic_matrix(self.lam, self.mu, self.dim)
-        radius = np.asarray(self.basis.global_coordinates())[0] if axisym else np.ones(self.basis.dx.shape)
-        self.M = asm(forms.mass, self.basis, rho=case.material.rho, weight=radius).tocsr()
+        self.M = consistent_mass(self.basis, case.material.rho, axisym)
+        if case.wall is not None:
+            self.M = redistributed_mass(self.M, self.basis, self.edge_facets(case.wall.edge),
+                                        case.material.rho, axisym, INTORDER)
         self.Q = self._load_vector()
         self.fixed = self._fixed_dofs()
         if fix_rigid_body and case.body == RING and self.rep != AXISYMMETRIC:

@@ -2,7 +2,7 @@
 
 Constants come from :func:`cases.timeint.newmark_constants`, shared by every solver. The load is
 a Heaviside step, on at t = 0, so ``Q(t) = Q`` for every t >= 0 and the initial acceleration
-solves ``M a0 = Q - K u0``.
+solves ``M a0 = Q - K u0``. (A test scene may pass a load history ``Q(t)`` instead.)
 """
 
 from __future__ import annotations
@@ -15,15 +15,15 @@ import scipy.sparse.linalg as sla
 from cases.timeint import newmark_constants
 
 
-def march(system, Q: np.ndarray, u0: np.ndarray, v0: np.ndarray, dt: float, n_steps: int,
-          ) -> Iterator[tuple[int, float, np.ndarray, np.ndarray, int]]:
-    """Yield ``(step, t, u, v, iterations)`` for steps 1 .. ``n_steps``.
+def march(system, Q, u0: np.ndarray, v0: np.ndarray, dt: float, n_steps: int,
+          ) -> Iterator[tuple[int, float, np.ndarray, np.ndarray, np.ndarray, int]]:
+    """Yield ``(step, t, u, v, a, iterations)`` for steps 1 .. ``n_steps``.
 
     Parameters
     ----------
     system : :class:`~reference_fem.equilibrium.Elastic` (or ``Plastic``) built with
         ``c = a0 = 1 / (alpha dt^2)``; its ``solve(rhs, u)`` returns ``(u, iterations)``
-    Q : (n_free,) load vector (N)
+    Q : (n_free,) load vector (N), or a callable ``Q(t)`` returning one
     u0, v0 : (n_free,) initial displacement (m; zero stress assumed, so ``u0`` must be 0
         unless the body is free of stress there) and velocity (m/s)
     dt : time step (s)
@@ -37,11 +37,14 @@ def march(system, Q: np.ndarray, u0: np.ndarray, v0: np.ndarray, dt: float, n_st
     c = newmark_constants(dt)
     if not np.isclose(system.c, c.a0):
         raise ValueError("system was not built with c = a0 of this time step")
+    load = Q if callable(Q) else (lambda t: Q)
     u, v = u0.copy(), v0.copy()
-    a = sla.splu(system.M.tocsc()).solve(Q - system.A @ u0 + system.c * (system.M @ u0))
+    r0 = load(0.0) - system.A @ u0 + system.c * (system.M @ u0)
+    # no force, no acceleration: and massless contact nodes (a singular M) need no solve then
+    a = sla.splu(system.M.tocsc()).solve(r0) if np.any(r0) else np.zeros_like(u0)
     for n in range(1, n_steps + 1):
-        u_new, iterations = system.solve(Q + system.M @ (c.a0 * u + c.a2 * v + c.a3 * a), u)
+        u_new, iterations = system.solve(load(n * dt) + system.M @ (c.a0 * u + c.a2 * v + c.a3 * a), u)
         a_new = c.a0 * (u_new - u) - c.a2 * v - c.a3 * a
         v = v + c.a6 * a + c.a7 * a_new
         u, a = u_new, a_new
-        yield n, n * dt, u, v, iterations
+        yield n, n * dt, u, v, a, iterations

@@ -2,14 +2,23 @@
 
 Kinds: ``'point'`` with field ``'u'`` (interpolated with ``CellBasis.probes``), ``'sigma'``
 and ``'peps'`` (value at the nearest quadrature point); ``'max'`` of ``'peps'`` over all
-quadrature points. Components are 1-based body components (ring: r, z, theta; prism: x1, x2,
-x3), rotated from the mesh frame at the probe point.
+quadrature points; ``'edge_mean'`` of the normal stress ``sigma_nn`` on a plane face: the
+resultant of the consistent nodal reactions ``K u + M a - Q`` of the face's nodes along the
+normal, over the face area (exact for the wall's Lagrange multipliers, which are those
+reactions); ``'body_mean'`` of ``'u'`` or ``'v'``: the mass-weighted mean ``e^T M x / m``,
+``e`` the component's direction at every node (momentum over mass for ``'v'``).
+Components are 1-based body components (ring: r, z, theta; prism: x1, x2, x3), rotated from
+the mesh frame at the probe point.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
+from cases.params import UnsupportedCase
+
+from .face import plane_face
 from .forms import SQRT2
 from .frames import body_point_to_mesh, body_rotation
 
@@ -28,8 +37,9 @@ def mandel_to_tensor(m: np.ndarray) -> np.ndarray:
 class Probes:
     """Evaluators of ``case.probes`` on one model, in the case's order.
 
-    ``values(u, system)`` takes the full dof vector ``u`` (m) and the equilibrium system (for
-    stresses and plastic strains at quadrature points) and returns one float per probe.
+    ``values(u, system, v, a)`` takes the full dof vectors of displacement ``u`` (m), velocity
+    ``v`` and acceleration ``a`` (zero when omitted: a static state) and the equilibrium system
+    (for stresses and plastic strains at quadrature points); it returns one float per probe.
     """
 
     def __init__(self, model):
@@ -37,14 +47,26 @@ class Probes:
         self.names = [p.name for p in model.case.probes]
         self._evaluators = [self._evaluator(p) for p in model.case.probes]
 
-    def values(self, u: np.ndarray, system) -> list[float]:
-        return [float(f(u, system)) for f in self._evaluators]
+    def values(self, u: np.ndarray, system, v: np.ndarray | None = None, a: np.ndarray | None = None) -> list[float]:
+        zero = np.zeros_like(u)
+        v, a = (zero if x is None else x for x in (v, a))
+        return [float(f(u, v, a, system)) for f in self._evaluators]
 
     def _evaluator(self, probe):
         model, case = self.model, self.model.case
         kind, fld = probe.kind, probe.field
         if kind == "max" and fld == "peps":
-            return lambda u, s: s.peps.max()
+            return lambda u, v, a, s: s.peps.max()
+        if kind == "edge_mean" and fld == "sigma" and tuple(probe.component) == ("n", "n"):
+            return self._face_normal_stress(probe.edge)
+        if kind == "body_mean" and fld in ("u", "v"):
+            e = self._direction_field(probe.component[0])
+            mass = model.M @ np.ones(model.basis.N)
+            # a sparse row: its product is no BLAS call (whose threads stall on a busy machine)
+            weights = sp.csr_matrix((e @ model.M) / mass[:: model.dim].sum())
+            if fld == "u":
+                return lambda u, v, a, s: (weights @ u)[0]
+            return lambda u, v, a, s: (weights @ v)[0]
         if kind != "point" or fld not in ("u", "sigma", "peps"):
             raise UnsupportedCase(f"reference solver: probe {probe.name!r} ({kind} of {fld}) is not available")
         x = body_point_to_mesh(case, model.rep, probe.point)
@@ -52,11 +74,28 @@ class Probes:
         if fld == "u":
             P = model.basis.probes(x[:, None]).tocsr()  # component-major rows
             row = R[probe.component[0] - 1, : model.dim]
-            return lambda u, s: row @ (P @ u)
+            return lambda u, v, a, s: row @ (P @ u)
         q = int(np.argmin(np.linalg.norm(model.x_qp - x[:, None], axis=0)))
         if fld == "peps":
-            return lambda u, s: s.peps[q]
+            return lambda u, v, a, s: s.peps[q]
         if "n" in probe.component:
             raise UnsupportedCase(f"reference solver: probe {probe.name!r}: normal stress needs a face, not a point")
         i, j = (c - 1 for c in probe.component)
-        return lambda u, s: (R @ mandel_to_tensor(s.sigma[q : q + 1])[0] @ R.T)[i, j]
+        return lambda u, v, a, s: (R @ mandel_to_tensor(s.sigma[q : q + 1])[0] @ R.T)[i, j]
+
+    def _face_normal_stress(self, edge: str):
+        """``sigma_nn`` averaged over the plane face ``edge``, from the face's nodal reactions."""
+        model = self.model
+        face = plane_face(model, edge)
+        e = np.zeros((model.basis.N // model.dim, model.dim))
+        e[face.nodes] = face.normal
+        e = e.ravel() / face.area
+        k_row, m_row = (sp.csr_matrix(e @ X) for X in (model.stiffness(), model.M))
+        q = e @ model.Q
+        return lambda u, v, a, s: (k_row @ u + m_row @ a)[0] - q
+
+    def _direction_field(self, component: int) -> np.ndarray:
+        """Full dof vector of the unit direction of body ``component`` (1-based) at every node."""
+        model = self.model
+        R = body_rotation(model.case, model.rep, model.rmesh.mesh.doflocs)
+        return R[:, component - 1, : model.dim].ravel()

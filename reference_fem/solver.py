@@ -15,11 +15,12 @@ from cases.params import UnsupportedCase
 from cases.timeint import newmark_constants
 
 from .equilibrium import Elastic, NotConverged, Plastic
-from .frames import mesh_frame_to_cartesian, to_cartesian
+from .frames import AXISYMMETRIC, mesh_frame_to_cartesian, to_cartesian
 from .mesh import build_mesh, mirror_permutation
 from .model import INTORDER, Model
 from .newmark import march
 from .probes import Probes
+from .wall import ContactLog, WallSystem, case_wall_rows
 
 
 @dataclass
@@ -32,7 +33,8 @@ class ReferenceResult:
     history : probe name -> (n_steps + 1,) values, in the order of ``case.probes``; a run that
         stopped early has only the converged steps
     n_dof : number of free dofs
-    iterations : Newton iterations per step (1 for a linear step)
+    iterations : Newton iterations per step (1 for a linear step; with a wall, the active-set
+        iterations)
     converged : False when a step did not converge (the run stopped there)
     message : why the run stopped early, '' otherwise
     cpu_time_s : process CPU time (s) of the solve: assembly, factorization and time stepping;
@@ -41,7 +43,10 @@ class ReferenceResult:
         components; cell data 'peps', the element mean of the equivalent plastic strain, when
         plastic)
     info : 'dim', 'representation', 'element', 'n_elements', 'intorder', 'counts' (elements per
-        mesh direction), 'factorizations' (of K + a0 M and of tangents), 'cpu_mesh_s'
+        mesh direction), 'factorizations' (of K + a0 M and of tangents), 'cpu_mesh_s';
+        with a wall also 'contact_nodes', 'energy_before' and 'energy_after' (kinetic + strain,
+        J, at t = 0 and at the last step), 'contact_window' (first and last time with a wall
+        force, s, or None) and 'max_penetration' (m, over all nodes and steps; 0 if none)
     """
 
     t: np.ndarray
@@ -56,13 +61,10 @@ class ReferenceResult:
 
 
 def _system(model: Model, c: float):
+    if model.case.wall is not None:
+        return WallSystem(model, c, case_wall_rows(model))
     mat = model.case.material
     return Plastic(model, c, model.case.params["tol"]) if mat.plastic else Elastic(model, c)
-
-
-def _check_supported(case):
-    if case.wall is not None:
-        raise UnsupportedCase("reference solver: contact (rod_impact) is not available yet")
 
 
 def solve(case, progress: Callable[[int, int], None] | None = None) -> ReferenceResult:
@@ -80,10 +82,9 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> Reference
     Raises
     ------
     cases.params.UnsupportedCase
-        for scenes the reference solver cannot represent (contact; a 2D form that does not
-        exist for the scene).
+        for scenes the reference solver cannot represent (a 2D form that does not exist for
+        the scene; contact with plasticity; a wall facing a face that is not plane).
     """
-    _check_supported(case)
     cpu0 = time.process_time()
     rmesh = build_mesh(case)
     cpu_mesh = time.process_time() - cpu0
@@ -93,17 +94,23 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> Reference
     system = _system(model, newmark_constants(dt).a0)
     probes = Probes(model)
     free = model.free
-    u_full = np.zeros(model.basis.N)
-    zero = np.zeros(free.size)
-    times, rows, iterations = [0.0], [probes.values(u_full, system)], []
+    u_full, v_full, a_full = (np.zeros(model.basis.N) for _ in range(3))
+    zero, v0 = np.zeros(free.size), _initial_velocity(model)
+    v_full[free] = v0
+    log = ContactLog(system, model.rep == AXISYMMETRIC) if case.wall is not None else None
+    if log:
+        log.record(0.0, zero, v0, u_full)
+    times, rows, iterations = [0.0], [probes.values(u_full, system, v_full)], []
     converged, message = True, ""
-    steps = march(system, model.Q[free], zero, _initial_velocity(model), dt, n_steps)
+    steps = march(system, model.Q[free], zero, v0, dt, n_steps)
     try:
-        for n, t, u, _v, its in steps:
-            u_full[free] = u
+        for n, t, u, v, a, its in steps:
+            u_full[free], v_full[free], a_full[free] = u, v, a
             times.append(t)
-            rows.append(probes.values(u_full, system))
+            rows.append(probes.values(u_full, system, v_full, a_full))
             iterations.append(its)
+            if log:
+                log.record(t, u, v, u_full)
             if progress is not None:
                 progress(n, n_steps)
     except NotConverged as err:
@@ -114,7 +121,8 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> Reference
     return ReferenceResult(
         t=np.array(times), history=history, n_dof=int(free.size), iterations=iterations,
         converged=converged, message=message, cpu_time_s=cpu,
-        mesh=output_mesh(model, u_full, system), info=_info(model, system, cpu_mesh),
+        mesh=output_mesh(model, u_full, system),
+        info=dict(_info(model, system, cpu_mesh), **(log.info() if log else {})),
     )
 
 
@@ -132,7 +140,8 @@ def static(case, factors=(1.0,)) -> tuple[Model, list[np.ndarray], list[int], ob
     iterations : Newton iterations per load step
     system : the equilibrium system after the last step (``sigma``, ``peps``)
     """
-    _check_supported(case)
+    if case.wall is not None:
+        raise UnsupportedCase("reference solver: contact is transient only (a free body has no static state)")
     model = Model(case, fix_rigid_body=True)
     system = _system(model, 0.0)
     u = np.zeros(model.free.size)

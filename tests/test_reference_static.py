@@ -56,13 +56,6 @@ def test_mesh_volume_and_holes(name, dim):
     assert volume == pytest.approx(section_volume(name, dim), rel=tol)
 
 
-def test_rod_impact_is_refused():
-    from reference_fem import solve
-
-    with pytest.raises(ValueError, match=r"contact \(rod_impact\) is not available yet"):
-        solve(get_case("rod_impact"))
-
-
 @pytest.mark.parametrize("overrides", [{}, {"dim": 3}, {"nu": 0.3}])
 def test_strain_operator_matches_skfem_elasticity(overrides):
     """B^T D B equals scikit-fem's own linear elasticity form (plane strain and 3D)."""

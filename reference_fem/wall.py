@@ -1,0 +1,95 @@
+"""An elastic body against the case's rigid wall: the equilibrium system of a contact step."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cases.params import UnsupportedCase
+
+from .contact import WallContact, WallRows, wall_rows
+from .equilibrium import Elastic
+from .face import plane_face
+
+#: penetration tolerance relative to the largest mesh coordinate (round-off level)
+PENETRATION_TOL = 1e-12
+
+
+class WallSystem(Elastic):
+    """``(K + c M) u = rhs + H^T p`` with the wall's contact forces ``p`` (:mod:`.contact`).
+
+    ``K + c M`` is factorized once; each step costs one back-substitution, the small dense
+    contact problem of its active-set iterations and one product ``W p``.
+
+    Attributes
+    ----------
+    rows : :class:`~reference_fem.contact.WallRows`
+    contact : :class:`~reference_fem.contact.WallContact`
+    state : :class:`~reference_fem.contact.ContactState` of the last step
+    """
+
+    def __init__(self, model, c: float, rows: WallRows):
+        super().__init__(model, c)
+        self.rows = rows
+        self.contact = WallContact(self.lu, rows)
+        self.state = self.contact.initial()
+
+    def solve(self, rhs: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, int]:
+        """Solution and active-set iteration count; ``u`` (start of the step) anchors stick."""
+        u_star = self.lu.solve(rhs)
+        H = self.rows.H
+        self.state, its = self.contact.solve(H @ u_star, H @ u, self.state)
+        u = u_star + self.contact.W @ self.state.p
+        self.sigma = self.elastic_stress(u)
+        return u, its
+
+
+def case_wall_rows(model) -> WallRows:
+    """Constraint rows of the face ``case.wall.edge`` of ``model`` against the case's wall."""
+    wall = model.case.wall
+    if model.case.material.plastic:
+        raise UnsupportedCase("reference solver: contact with plasticity is not available")
+    face = plane_face(model, wall.edge)
+    return wall_rows(face.nodes, face.normal, np.full(face.nodes.size, wall.gap), model.free,
+                     model.basis.N, wall.friction, PENETRATION_TOL * np.abs(model.rmesh.mesh.p).max())
+
+
+class ContactLog:
+    """Per-step diagnostics of a contact run, for ``ReferenceResult.info``.
+
+    Energies are kinetic plus strain energy ``(v M v + u K u) / 2`` of the whole body (J;
+    axisymmetric values are per radian times 2 pi), at t = 0 and at the last step.
+    """
+
+    def __init__(self, system: WallSystem, per_radian: bool):
+        self.system = system
+        model = system.model
+        self.face, self.gap = plane_face(model, model.case.wall.edge), model.case.wall.gap
+        self.factor = 2 * np.pi if per_radian else 1.0
+        self.energy = []
+        self.contact_times = []
+        self.max_penetration = 0.0
+
+    def record(self, t: float, u: np.ndarray, v: np.ndarray, u_full: np.ndarray) -> None:
+        """Log the state ``u``, ``v`` (free dofs; ``u_full`` all dofs) at time ``t``."""
+        s = self.system
+        # elementwise products, not BLAS dot: its threads stall on a busy machine
+        self.energy.append(0.5 * self.factor * float(np.sum(v * (s.M @ v)) + np.sum(u * (s.K @ u))))
+        if s.state.p[: s.rows.n_c].sum() > 0:
+            self.contact_times.append(t)
+        self.max_penetration = max(self.max_penetration, -self.clearance(u_full))
+
+    def clearance(self, u_full: np.ndarray) -> float:
+        """Smallest distance of any mesh node to the wall (m), negative when it penetrates."""
+        model = self.system.model
+        x = model.rmesh.mesh.doflocs + model.nodal_displacement(u_full)
+        return float(self.face.offset + self.gap - (self.face.normal @ x).max())
+
+    def info(self) -> dict:
+        window = [self.contact_times[0], self.contact_times[-1]] if self.contact_times else None
+        return {
+            "contact_nodes": int(self.system.rows.n_c),
+            "energy_before": float(self.energy[0]),
+            "energy_after": float(self.energy[-1]),
+            "contact_window": window,
+            "max_penetration": float(self.max_penetration),
+        }
