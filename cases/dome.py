@@ -10,7 +10,7 @@ import math
 from .case import Case
 from .geometry import RING, Axis, Pressure, Probe, Section, Support
 from .material import Material, tau_s_from_sigma_y
-from .params import COMMON, Spec
+from .params import COMMON, MAX_STRESS, Spec
 
 NAME = "dome"
 TITLE = "Clamped spherical cap, suddenly applied pressure (axisymmetric)"
@@ -20,7 +20,7 @@ DEFAULTS = dict(
     dt=5e-6, t_end=1e-3, refine=1, harmonics=1, E=10.5e6, nu=0.3, rho=2.45e-4,
     tau_s=tau_s_from_sigma_y(24000.0), plastic=False, tol=1e-5, dim=2, q=600.0,
 )
-SPECS = dict(COMMON, q=Spec(float, help="external pressure, psi"))
+SPECS = dict(COMMON, q=Spec(float, -MAX_STRESS, MAX_STRESS, help="external pressure, psi"))
 PROVENANCE = dict(
     paper="R, h, half-angle, E, nu, rho, sigma_y = 24000 psi, E_T, q = 600 psi, dt = 5e-6 s, "
     "t_end = 1e-3 s, 4 x 20 mesh, published apex extrema",

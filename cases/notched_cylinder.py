@@ -10,7 +10,7 @@ import math
 from .case import Case
 from .geometry import RING, Axis, Cutout, Pressure, Probe, Section, Support
 from .material import Material
-from .params import COMMON, Spec
+from .params import COMMON, MAX_STRESS, Spec
 
 NAME = "notched_cylinder"
 TITLE = "Thick cylinder with two inner cut-outs, external pressure (plane strain)"
@@ -23,7 +23,7 @@ DEFAULTS = dict(
 )
 SPECS = dict(
     COMMON,
-    q=Spec(float, help="external pressure, Pa"),
+    q=Spec(float, -MAX_STRESS, MAX_STRESS, help="external pressure, Pa"),
     contrast=Spec(float, 0.0, 1.0, open_lo=True, help="stiffness and density factor of cut-out material"),
 )
 PROVENANCE = dict(

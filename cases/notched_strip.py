@@ -9,12 +9,13 @@ plane-strain width, contrast 1e-6.
 from .case import Case
 from .geometry import PRISM, Axis, Cutout, Pressure, Probe, Section, Support
 from .material import Material
-from .params import COMMON, Spec
+from .params import COMMON, MAX_STRESS, Spec
 
 NAME = "notched_strip"
 TITLE = "Hinged strip with a mid-span notch, uniform pressure (prismatic, plane strain)"
 L, H, N_Z = 0.3, 0.1, 20
 NOTCH_X3 = (0.145, 0.155)
+Z_PEPS_NOTCH, Z_PEPS_TOP = 0.0275, 0.0975  # element centres of the paper's 5 mm rows
 
 DEFAULTS = dict(
     dt=3.2e-6, t_end=3.2e-4, refine=1, harmonics=80, E=2.1e11, nu=0.3, rho=7.8e3, tau_s=1.7e8,
@@ -22,8 +23,9 @@ DEFAULTS = dict(
 )
 SPECS = dict(
     COMMON,
-    q=Spec(float, help="pressure on the top face, Pa"),
-    notch_depth=Spec(float, 0.0, H, open_hi=True, help="notch depth, m (0 = no notch)"),
+    q=Spec(float, -MAX_STRESS, MAX_STRESS, help="pressure on the top face, Pa"),
+    notch_depth=Spec(float, 0.0, Z_PEPS_NOTCH, open_hi=True,
+                     help="notch depth, m (0 = no notch; the notch root stays below the peps_notch probe)"),
     contrast=Spec(float, 0.0, 1.0, open_lo=True, help="stiffness and density factor of notch material"),
 )
 PROVENANCE = dict(
@@ -44,8 +46,8 @@ def build(p: dict) -> Case:
     probes = [Probe("mid_uz", "point", "u", (2,), point=(0.0, H, L / 2))]
     if p["plastic"]:
         probes += [
-            Probe("peps_notch", "point", "peps", point=(dz / 2, 0.0275, L / 2)),
-            Probe("peps_top", "point", "peps", point=(dz / 2, 0.0975, L / 2)),
+            Probe("peps_notch", "point", "peps", point=(dz / 2, Z_PEPS_NOTCH, L / 2)),
+            Probe("peps_top", "point", "peps", point=(dz / 2, Z_PEPS_TOP, L / 2)),
         ]
     d = p["notch_depth"]
     return Case(

@@ -2,6 +2,10 @@
 
 Every failure raises :class:`ParameterError` with one line that names the key and the allowed
 range; the command line turns it into exit status 2.
+
+Every number has finite bounds: a valid set of parameters must give finite results, and
+extremes such as dt = 1e-300 (1 / dt^2 overflows) or E = 1e300 do not. The bounds are wide
+enough for any engineering unit system (the dome is in psi, the rest in SI).
 """
 
 from __future__ import annotations
@@ -13,6 +17,14 @@ from dataclasses import dataclass
 
 class ParameterError(ValueError):
     """A user mistake in a case name, a key or a value."""
+
+
+#: largest |stress| or modulus (E, tau_s, q), in the case's units
+MAX_STRESS = 1e15
+#: smallest modulus (E, tau_s), in the case's units
+MIN_MODULUS = 1e-6
+#: most time steps one run may take (t_end / dt)
+MAX_STEPS = 1_000_000
 
 
 class UnsupportedCase(ValueError):
@@ -62,7 +74,10 @@ class Spec:
                 raise ParameterError(bad)
             value = int(value)
         else:
-            value = float(value)
+            try:
+                value = float(value)
+            except OverflowError:  # an integer literal beyond the float range
+                raise ParameterError(bad) from None
             if not math.isfinite(value):
                 raise ParameterError(bad)
         if self.choices is not None and value not in self.choices:
@@ -76,16 +91,18 @@ class Spec:
 
 #: keys every case accepts (CONTRACT.md), plus ``dim`` for the reference solver
 COMMON = {
-    "dt": Spec(float, 0.0, None, open_lo=True, help="time step, s"),
-    "t_end": Spec(float, 0.0, None, open_lo=True, help="end of the time window, s"),
+    "dt": Spec(float, 1e-12, 1e3, help="time step, s"),
+    "t_end": Spec(float, 1e-12, 1e6, help="end of the time window, s"),
     "refine": Spec(int, 1, 64, help="multiplies the paper mesh's element counts"),
     "harmonics": Spec(int, 1, 2000, help="number of Fourier terms kept"),
-    "E": Spec(float, 0.0, None, open_lo=True, help="Young's modulus"),
-    "nu": Spec(float, -1.0, 0.5, open_lo=True, open_hi=True, help="Poisson's ratio"),
-    "rho": Spec(float, 0.0, None, open_lo=True, help="density"),
-    "tau_s": Spec(float, 0.0, None, open_lo=True, help="yield stress in pure shear"),
+    "E": Spec(float, MIN_MODULUS, MAX_STRESS, help="Young's modulus"),
+    # nu -> 1/2 or -1 leaves double precision: lambda / mu = 2 nu / (1 - 2 nu) is 5e4 at the bound
+    "nu": Spec(float, -0.9999, 0.49999, help="Poisson's ratio"),
+    "rho": Spec(float, 1e-12, 1e6, help="density"),
+    "tau_s": Spec(float, MIN_MODULUS, MAX_STRESS, help="yield stress in pure shear"),
     "plastic": Spec(bool, help="elasto-plastic variant"),
-    "tol": Spec(float, 0.0, 1.0, open_lo=True, open_hi=True, help="iteration tolerance"),
+    # a relative change below 1e-14 is round-off: such a tolerance could never be met
+    "tol": Spec(float, 1e-14, 1.0, open_hi=True, help="iteration tolerance"),
     "dim": Spec(int, choices=(2, 3), help="reference FEM: 2 (plane strain/axisymmetric) or 3"),
 }
 
@@ -98,7 +115,7 @@ def parse_value(key: str, text: str):
         return float(text)
     try:
         return ast.literal_eval(text)
-    except (ValueError, SyntaxError):
+    except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
         raise ParameterError(f"{key}={text!r} is not a value: write a number or true/false") from None
 
 
@@ -125,4 +142,9 @@ def validate(specs: dict[str, Spec], defaults: dict, overrides: dict, case_name:
         params[key] = specs[key].check(key, value)
     if params["dt"] > params["t_end"]:
         raise ParameterError(f"dt={params['dt']:g} is out of range: dt must not exceed t_end={params['t_end']:g}")
+    if params["t_end"] / params["dt"] > MAX_STEPS + 0.5:
+        raise ParameterError(
+            f"t_end={params['t_end']:g} and dt={params['dt']:g} are out of range: t_end / dt must be at most "
+            f"{MAX_STEPS} time steps"
+        )
     return params

@@ -11,7 +11,7 @@ import math
 from .case import Case
 from .geometry import RING, Axis, Pressure, Probe, Section, Support
 from .material import Material
-from .params import COMMON, Spec
+from .params import COMMON, MAX_STRESS, Spec
 
 NAME = "thick_cylinder"
 TITLE = "Thick cylinder, pressure on two opposite 90 deg patches (plane strain)"
@@ -23,7 +23,7 @@ DEFAULTS = dict(
     dt=4e-5, t_end=4e-3, refine=1, harmonics=20, E=2.1e11, nu=0.0, rho=7.8e3, tau_s=1.7e8,
     plastic=False, tol=1e-5, dim=2, q=None,
 )
-SPECS = dict(COMMON, q=Spec(float, help="patch pressure, Pa (default 1 elastic, 5e7 plastic)"))
+SPECS = dict(COMMON, q=Spec(float, -MAX_STRESS, MAX_STRESS, help="patch pressure, Pa (default 1 elastic, 5e7 plastic)"))
 PROVENANCE = dict(
     paper="r1, r2, E, nu, rho, tau_s, 45 deg patches, q = 1 Pa, dt = 4e-5 s, 15 elements, "
     "20 Fourier terms, probes A, B, C, plastic zone times",

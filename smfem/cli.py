@@ -116,6 +116,13 @@ def main(argv=None) -> int:
     except (UsageError, ParameterError, UnsupportedCase) as exc:
         print(f"smfem: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    except MemoryError:
+        print("smfem: error: out of memory: the model is too large for this machine (lower refine or harmonics)",
+              file=sys.stderr)
+        return EXIT_USAGE
+    except BrokenPipeError:  # the reader went away (`smfem cases | head`): not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit
+        return 0
 
 
 if __name__ == "__main__":

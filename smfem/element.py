@@ -10,6 +10,16 @@ prism: l pi / length). The moment scheme keeps the centre value ``B0`` and, of t
 derivatives along the local coordinates ``xi, eta`` in [-1/2, 1/2], only the rows that may vary:
 ``d/dxi``: e22, e33, g23; ``d/deta``: e11, e33, g13. With ``int xi^2 = 1/12`` the element
 stiffness is ``sqrt(g) [B0' D B0 + (B1' D B1 + B2' D B2) / 12]`` (paper (3)-(5)).
+
+The normal strain that the scheme does not let vary along a direction (e11 along xi, e22
+along eta) is not held at zero but left free, like Wilson's incompatible modes: it takes the
+value that makes its own stress gradient vanish, ``e11,1 = -c (e22,1 + e33,1)`` and
+``e22,2 = -c (e11,2 + e33,2)`` with ``c = lambda / (lambda + 2 mu) = nu / (1 - nu)``. Held at
+zero, it made the volumetric strain gradient a second constraint per element, weighted by
+lambda: the element locked as nu -> 1/2 (thick cylinder, nu = 0.4999: 54 % off Lame on the
+paper mesh), and thin parts were too stiff in bending (sigma22 could not relax through the
+thickness). Left free, the gradient terms carry only moduli that stay bounded as nu -> 1/2;
+constant-strain states have no gradients, so the patch test is unaffected, and so is nu = 0.
 The derivatives are taken by complex-step differentiation of the exact strain expressions
 (1/r terms and the varying Jacobian included), which is exact to round-off and carries the
 metric terms h(ii),b of the paper without writing them out.
@@ -44,18 +54,25 @@ class ElementOperators:
     """Moment-scheme strain operators of all elements, ``(n_elements, 6, 12)`` each.
 
     ``B0 = Ba0 + p Bb0`` etc.; ``sqrt_g`` (n_elements,) is |det J| at the centre, times r_c for
-    a ring; ``rotation`` (n_elements, 2, 2) has rows t1, t2.
+    a ring; ``rotation`` (n_elements, 2, 2) has rows t1, t2; ``free_ratio`` is
+    ``nu / (1 - nu)``, the factor of the free normal strain gradients (module docstring).
     """
 
     Ba: tuple[np.ndarray, np.ndarray, np.ndarray]
     Bb: tuple[np.ndarray, np.ndarray, np.ndarray]
     sqrt_g: np.ndarray
     rotation: np.ndarray
+    free_ratio: float
 
     def at(self, p: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(B0, B1, B2)`` for wavenumber ``p``, with the rows the scheme drops set to zero."""
+        """``(B0, B1, B2)`` for wavenumber ``p``: the rows the scheme drops are zero, except the
+        free normal strain gradients e11,1 and e22,2."""
         B0, B1, B2 = (a + p * b for a, b in zip(self.Ba, self.Bb))
-        return B0, B1 * ROWS_VARY_XI[:, None], B2 * ROWS_VARY_ETA[:, None]
+        B1, B2 = B1 * ROWS_VARY_XI[:, None], B2 * ROWS_VARY_ETA[:, None]
+        c = self.free_ratio
+        B1[:, 0] = -c * (B1[:, 1] + B1[:, 2])
+        B2[:, 1] = -c * (B2[:, 0] + B2[:, 2])
+        return B0, B1, B2
 
 
 def local_frame(X: np.ndarray) -> np.ndarray:
@@ -112,8 +129,9 @@ def strain_operator(X: np.ndarray, body: str, p: float, xi, eta) -> np.ndarray:
     return B.reshape(n, 6, 12)
 
 
-def operators(X: np.ndarray, body: str) -> ElementOperators:
-    """Moment-scheme operators of all elements with nodal coordinates ``X`` (n, 4, 2)."""
+def operators(X: np.ndarray, body: str, nu: float) -> ElementOperators:
+    """Moment-scheme operators of all elements with nodal coordinates ``X`` (n, 4, 2), for a
+    material of Poisson's ratio ``nu`` (it sets the free normal strain gradients)."""
     R = local_frame(X)
     T = strain_rotation(R)
     parts = []
@@ -127,7 +145,7 @@ def operators(X: np.ndarray, body: str) -> ElementOperators:
     sqrt_g = np.abs(np.linalg.det(J))
     if body == RING:
         sqrt_g = sqrt_g * X[:, :, 0].mean(axis=1)
-    return ElementOperators(Ba, Bb, sqrt_g, R)
+    return ElementOperators(Ba, Bb, sqrt_g, R, nu / (1.0 - nu))
 
 
 def element_stiffness(ops: ElementOperators, p: float, D: np.ndarray, q: float | None = None) -> np.ndarray:

@@ -65,7 +65,7 @@ class Model:
         self.length = case.length
         self.scheme = scheme
         self.mesh: SectionMesh = section_mesh(case.section, refine or case.refine)
-        self.ops = element.operators(self.mesh.element_x(), case.body)
+        self.ops = element.operators(self.mesh.element_x(), case.body, case.material.nu)
         mat = case.material
         self.D = isotropic_D(mat.E, mat.nu)
         self.rho = mat.rho

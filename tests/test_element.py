@@ -28,7 +28,7 @@ def distorted_mesh(x1_range=(1.0, 2.0), seed=0, n=(4, 3)):
 
 
 def stiffness(x, elements, body, p, integrals=(1.0, 1.0)):
-    ops = element.operators(x[elements], body)
+    ops = element.operators(x[elements], body, 0.3)
     W = np.zeros((len(elements), 2, 2))
     W[:, 0, 0], W[:, 1, 1] = integrals
     return assemble(element.element_stiffness(ops, p, weighted_elasticity(D, W)), elements, len(x))
@@ -132,7 +132,7 @@ def test_patch_test_constant_strain_is_reproduced(body):
 def test_complex_step_derivatives_match_finite_differences():
     x, elements = distorted_mesh(seed=5)
     X = x[elements]
-    ops = element.operators(X, RING)
+    ops = element.operators(X, RING, 0.3)
     B0, B1, B2 = (a + 2.0 * b for a, b in zip(ops.Ba, ops.Bb))
     T = element.strain_rotation(ops.rotation)
     h = 1e-6

@@ -1,0 +1,323 @@
+"""Stability on stiff and extreme settings (issue 7): the figures, as tables.
+
+* :func:`free_vibration` -- unconditional stability: linear free vibration with the time step at
+  1, 10 and 100 times the explicit (central difference) limit ``dt_cr = 2 / omega_max``;
+* :func:`incompressibility` -- nu -> 1/2, thick cylinder under internal pressure against Lame;
+* :func:`thin_dome` -- the clamped cap from R/h = 54 (the paper's) to 1000, static apex
+  deflection against the converged reference;
+* :func:`many_harmonics` -- 200 Fourier terms for the elastic thick cylinder;
+* :func:`bad_input` -- every out-of-range value of every key through the command line;
+* :func:`stability_table` -- the headline figures of all of them, one row per figure.
+
+Every function returns a list of dicts (one row per setting); the tests
+(``tests/test_stability.py``, ``tests/test_bad_input.py``) assert on these rows, the report
+prints them. The reference solver is imported only where it is compared against.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import io
+import math
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse.linalg as sla
+
+from cases import CASES, get_case
+from cases.analytic import lame_cylinder
+from cases.geometry import Axis, Pressure
+
+from .model import Model
+from .newmark import LinearNewmark
+from .probes import ProbeSet
+from .solver import solve, stacked
+
+#: the acceptance limits of issue 7
+ENERGY_DRIFT_LIMIT = 1e-10
+AGREEMENT_LIMIT = 0.02
+#: elements per clamped-edge layer width that the 4-node moment-scheme element needs (thin dome)
+ELEMENTS_PER_EDGE_LAYER = 3
+
+
+def explicit_limit(model: Model) -> tuple[float, list[float]]:
+    """Explicit stability limit ``dt_cr = 2 / omega_max`` of a decoupled model, and
+    ``omega_max`` (rad/s) of each mode: the largest eigenvalue of ``M^-1 K`` per harmonic."""
+    omegas = []
+    for s in model.systems:
+        d = 1.0 / np.sqrt(s.M)
+        omegas.append(math.sqrt(np.linalg.eigvalsh(s.K.toarray() * d[:, None] * d[None, :]).max()))
+    return 2.0 / max(omegas), omegas
+
+
+def free_vibration(name: str = "thick_cylinder", overrides: dict | None = None, factors=(1, 10, 100),
+                   n_steps: int = 10_000, seed: int = 1) -> list[dict]:
+    """Free vibration released from the static deflection under the case's load, with random
+    initial velocities of the same energy (every mode excited, the highest included), stepped
+    with ``dt = factor * dt_cr``.
+
+    Rows: ``energy_drift`` is max over all steps of |E_n - E_0| / E_0 (E kinetic plus strain);
+    ``strain_energy_max`` the largest strain energy over E_0 (bounded: at most 1 + drift);
+    ``u_max_ratio`` the largest |u| over the run relative to the initial one.
+    """
+    model = Model(get_case(name, overrides or {}))
+    K, M, Q, _, _ = stacked(model)
+    dt_cr, omegas = explicit_limit(model)
+    u0 = sla.spsolve(K.tocsc(), Q)
+    v0 = np.random.default_rng(seed).normal(size=len(Q))
+    v0 *= math.sqrt((u0 @ (K @ u0)) / (v0 @ (M * v0)))
+    rows = []
+    for factor in factors:
+        stepper = LinearNewmark(K, M, np.zeros_like(Q), factor * dt_cr)
+        state = stepper.initial(u0, v0)
+        e0 = sum(stepper.energy(state))
+        drift, strain_max, u_max = 0.0, 0.0, np.abs(u0).max()
+        for state in stepper.run(state, n_steps):
+            kinetic, strain = stepper.energy(state)
+            drift = max(drift, abs(kinetic + strain - e0) / e0)
+            strain_max = max(strain_max, strain / e0)
+            u_max = max(u_max, np.abs(state.u).max())
+        rows.append({
+            "case": name, "modes": len(model.systems), "n_dof": model.n_dof, "omega_max": max(omegas),
+            "dt_cr": dt_cr, "factor": factor, "dt": factor * dt_cr, "n_steps": n_steps, "energy_drift": drift,
+            "strain_energy_max": strain_max, "u_max_ratio": u_max / np.abs(u0).max(), "finite": bool(np.isfinite(state.u).all()),
+        })
+    return rows
+
+
+def static_probes(case, model: Model | None = None) -> dict:
+    """SMFEM static solution under the case's loads: probe name -> value."""
+    model = model or Model(case)
+    K, _, Q, _, _ = stacked(model)
+    u = sla.spsolve(K.tocsc(), Q)
+    probes = ProbeSet(model, case.probes)
+    return dict(zip(probes.names, probes.evaluate(u, u)))
+
+
+def reference_static_probes(case) -> dict:
+    """Reference FEM static solution under the case's loads: probe name -> value."""
+    from reference_fem import static
+    from reference_fem.probes import Probes
+
+    model, (u,), _, system = static(case)
+    return dict(zip([p.name for p in case.probes], Probes(model).values(u, system)))
+
+
+def internal_pressure(p: float = 1e6, **overrides):
+    """The thick cylinder under uniform internal pressure ``p`` (Pa): Lame's problem."""
+    case = get_case("thick_cylinder", overrides)
+    return dataclasses.replace(case, loads=(Pressure(p, "inner", ((0.0, 2 * math.pi),)),))
+
+
+def _held_at_zero(model: Model) -> Model:
+    """``model`` with the free normal strain gradients held at zero (the element before the
+    fix in :mod:`smfem.element`), for the comparison row."""
+    model.ops = dataclasses.replace(model.ops, free_ratio=0.0)
+    for i, s in enumerate(model.systems):
+        s.K = (s.T.T @ model.full_stiffness(i, i) @ s.T).tocsr()
+    return model
+
+
+def incompressibility(nus=(0.49, 0.499, 0.4999), p: float = 1e6, reference_dims=(2, 3)) -> list[dict]:
+    """Relative errors of u_r at r1 (C) and r2 (A) against Lame: SMFEM (paper mesh), SMFEM with
+    the free gradients held at zero, and the reference FEM in 2D and 3D."""
+    rows = []
+    for nu in nus:
+        case = internal_pressure(p, nu=nu)
+        exact = lame_cylinder(np.array([2.0, 1.0]), 1.0, 2.0, p, 0.0, case.material.E, nu)["u_r"]
+
+        def error(values):
+            return max(abs(values["A_ur"] / exact[0] - 1), abs(values["C_ur"] / exact[1] - 1))
+
+        row = {"nu": nu, "smfem": error(static_probes(case)),
+               "smfem_gradients_held": error(static_probes(case, _held_at_zero(Model(case))))}
+        for dim in reference_dims:
+            row[f"reference_{dim}d"] = error(reference_static_probes(internal_pressure(p, nu=nu, dim=dim)))
+        rows.append(row)
+    return rows
+
+
+def dome_with(thickness: float, n_thick: int = 4, n_meridian: int = 20):
+    """The dome scene with shell thickness ``thickness`` (in) and these mesh counts."""
+    from cases.dome import HALF_ANGLE_DEG, R
+
+    case = get_case("dome")
+    section = dataclasses.replace(
+        case.section, s=Axis((R - thickness / 2, R + thickness / 2), (n_thick,)),
+        t=Axis((0.0, math.radians(HALF_ANGLE_DEG)), (n_meridian,)),
+    )
+    return dataclasses.replace(case, section=section)
+
+
+def edge_layer_width(R: float, h: float, nu: float) -> float:
+    """Decay length of the bending boundary layer at a clamped shell edge, sqrt(R h) / (3 (1 - nu^2))^(1/4)."""
+    return math.sqrt(R * h) / (3 * (1 - nu * nu)) ** 0.25
+
+
+def thin_dome(ratios=(54.3, 100, 200, 543, 1000), converged_meridian: int = 160) -> list[dict]:
+    """Static apex deflection of the clamped cap of thickness h = R / ratio.
+
+    Against the reference at 4 x ``converged_meridian`` (converged to 1e-4): SMFEM at the paper's
+    4 x 20, at 1 and 8 elements through the thickness (locking would depend on them), and at
+    the meridian count that puts ``ELEMENTS_PER_EDGE_LAYER`` elements in the clamped edge's
+    bending layer, and at 4 x (4 ``converged_meridian``): the bilinear elements need four times
+    as many to converge as far, and double precision suffices even at R/h = 1000; the
+    reference at 4 x 20 as well.
+    """
+    from cases.dome import HALF_ANGLE_DEG, R
+
+    alpha = math.radians(HALF_ANGLE_DEG)
+    rows = []
+    for ratio in ratios:
+        h = R / ratio
+        apex = lambda **mesh: static_probes(dome_with(h, **mesh))["apex_uz"]
+        converged = reference_static_probes(dome_with(h, n_meridian=converged_meridian))["apex_uz"]
+        layer = edge_layer_width(R, h, get_case("dome").material.nu)
+        needed = math.ceil(ELEMENTS_PER_EDGE_LAYER * R * alpha / layer)
+        rows.append({
+            "R_over_h": ratio, "h": h, "apex_reference": converged,
+            "smfem_4x20": apex() / converged - 1,
+            "smfem_1x20": apex(n_thick=1) / converged - 1,
+            "smfem_8x20": apex(n_thick=8) / converged - 1,
+            "reference_4x20": reference_static_probes(dome_with(h))["apex_uz"] / converged - 1,
+            "elements_per_layer_4x20": layer / (R * alpha / 20),
+            "meridian_needed": needed,
+            "smfem_4x_needed": apex(n_meridian=needed) / converged - 1,
+            "smfem_converged": apex(n_meridian=4 * converged_meridian) / converged - 1,
+            "cond_4x20": float(np.linalg.cond(Model(dome_with(h)).systems[0].K.toarray())),
+        })
+    return rows
+
+
+def history_error(a: np.ndarray, b: np.ndarray) -> float:
+    """max|a - b| / max|b| over the window."""
+    return float(np.abs(a - b).max() / np.abs(b).max())
+
+
+def many_harmonics(counts=(20, 80, 200), refine: int = 2, reference_refine: int = 2) -> list[dict]:
+    """The elastic thick cylinder with ``counts`` Fourier terms: probe histories against 80 terms
+    and against the reference FEM; the modes computed (the loaded ones), dof, CPU time, and the
+    paper's dt relative to the explicit limit of that system."""
+    from reference_fem import solve as reference
+
+    ref = reference(get_case("thick_cylinder", {"refine": reference_refine})).history
+    runs = {n: solve(get_case("thick_cylinder", {"harmonics": n, "refine": refine}), with_fields=False)
+            for n in sorted(set(counts) | {80})}
+    rows = []
+    for n in counts:
+        run = runs[n]
+        dt_cr, _ = explicit_limit(Model(get_case("thick_cylinder", {"harmonics": n, "refine": refine})))
+        row = {"harmonics": n, "modes": len(run.info["harmonics_used"]), "n_dof": run.n_dof,
+               "cpu_time_s": run.cpu_time_s, "dt_over_dt_cr": get_case("thick_cylinder").dt / dt_cr,
+               "finite": all(np.isfinite(h).all() for h in run.history.values())}
+        for probe, h in run.history.items():
+            row[f"{probe}_vs_80"] = history_error(h, runs[80].history[probe])
+            row[f"{probe}_vs_reference"] = history_error(h, ref[probe])
+        rows.append(row)
+    return rows
+
+
+def out_of_range(spec) -> list:
+    """Values that ``spec`` must refuse: past each bound, the open bounds themselves, the
+    non-finite floats, wrong types (as ``--set`` text)."""
+    if spec.type is bool:
+        return ["3", "maybe", "1.0"]
+    if spec.choices is not None:
+        return [repr(max(spec.choices) + 1), "x"]
+    bad = ["nan", "inf", "-inf", "'x'", "(1, 2)"]
+    if spec.lo is not None:
+        bad.append(repr(spec.lo - max(1.0, abs(spec.lo))))
+        if spec.open_lo:
+            bad.append(repr(spec.lo))
+    if spec.hi is not None:
+        bad.append(repr(spec.hi + max(1.0, abs(spec.hi))))
+        if spec.open_hi:
+            bad.append(repr(spec.hi))
+    if spec.type is int:
+        bad += ["1.5", "true"]
+    return bad
+
+
+def cli_outcome(args: list[str]) -> dict:
+    """Run the command line with ``--out`` in a scratch directory: exit status, stderr, whether
+    anything was written, and the history table if one was."""
+    import pandas as pd
+
+    from .cli import main
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "out"
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            code = main(args + ["--out", str(out)])
+        history = pd.read_csv(out / "history.csv") if (out / "history.csv").exists() else None
+        return {"code": code, "stderr": err.getvalue().strip(), "written": out.exists(), "history": history}
+
+
+def bad_input(solvers=("smfem", "reference"), names=tuple(CASES)) -> list[dict]:
+    """Every out-of-range value of every key of the cases ``names``, through ``smfem run``: one
+    row each with the exit status, the message and whether it names the key and the allowed
+    range."""
+    rows = []
+    for solver in solvers:
+        for name in names:
+            for key, spec in CASES[name].SPECS.items():
+                for text in out_of_range(spec):
+                    o = cli_outcome(["run", name, "--solver", solver, "--set", f"{key}={text}"])
+                    rows.append({
+                        "solver": solver, "case": name, "set": f"{key}={text}", "code": o["code"],
+                        "lines": len(o["stderr"].splitlines()), "message": o["stderr"],
+                        "names_key": key in o["stderr"],
+                        "names_range": "out of range" not in o["stderr"] or spec.describe() in o["stderr"],
+                        "written": o["written"],
+                    })
+    return rows
+
+
+def stability_table() -> list[dict]:
+    """One row per headline figure: ``check``, ``setting``, ``figure``, ``value``, ``limit``,
+    ``passed``. About half a minute."""
+    rows = []
+
+    def add(check, setting, figure, value, limit, passed):
+        rows.append({"check": check, "setting": setting, "figure": figure, "value": value, "limit": limit,
+                     "passed": bool(passed)})
+
+    t0 = time.perf_counter()
+    for name, overrides in (("thick_cylinder", {}), ("dome", {}), ("thick_cylinder", {"harmonics": 200})):
+        for r in free_vibration(name, overrides):
+            add("unconditional stability", f"{name} {r['modes']} modes, dt = {r['factor']} dt_cr ({r['dt']:.3g} s)",
+                f"energy drift over {r['n_steps']} steps", r["energy_drift"], ENERGY_DRIFT_LIMIT,
+                r["finite"] and r["energy_drift"] < ENERGY_DRIFT_LIMIT)
+    for r in incompressibility():
+        for solver in ("smfem", "reference_2d", "reference_3d"):
+            add("near incompressibility", f"nu = {r['nu']}, {solver}", "u_r error against Lame", r[solver],
+                AGREEMENT_LIMIT, r[solver] < AGREEMENT_LIMIT)
+        add("near incompressibility", f"nu = {r['nu']}, smfem, free gradients held at zero (before the fix)",
+            "u_r error against Lame", r["smfem_gradients_held"], AGREEMENT_LIMIT,
+            r["smfem_gradients_held"] < AGREEMENT_LIMIT)
+    for r in thin_dome():
+        add("thin dome", f"R/h = {r['R_over_h']:g}, SMFEM 4 x 20 ({r['elements_per_layer_4x20']:.2f} elements "
+            "per edge layer)", "apex deflection against the reference", abs(r["smfem_4x20"]), AGREEMENT_LIMIT,
+            abs(r["smfem_4x20"]) < AGREEMENT_LIMIT)
+        add("thin dome", f"R/h = {r['R_over_h']:g}, SMFEM 4 x {r['meridian_needed']}",
+            "apex deflection against the reference", abs(r["smfem_4x_needed"]), AGREEMENT_LIMIT,
+            abs(r["smfem_4x_needed"]) < AGREEMENT_LIMIT)
+    for r in many_harmonics(counts=(200,)):
+        setting = (f"thick cylinder, {r['harmonics']} harmonics ({r['modes']} computed), refine 2, "
+                   f"dt = {r['dt_over_dt_cr']:.1f} dt_cr")
+        for probe in ("A_ur", "B_ut", "C_ur"):
+            for against in ("80", "reference"):
+                value = r[f"{probe}_vs_{against}"]
+                add("many harmonics", setting, f"{probe} history against {against}", value, AGREEMENT_LIMIT,
+                    r["finite"] and value < AGREEMENT_LIMIT)
+    bad = bad_input()
+    ok = [r for r in bad if r["code"] == 2 and r["lines"] == 1 and r["names_key"] and r["names_range"]
+          and not r["written"]]
+    add("bad input", f"{len(bad)} out-of-range values, every key of every case, both solvers",
+        "exit 2, one line naming the key and range, nothing written", len(ok), len(bad), len(ok) == len(bad))
+    add("study", "all of the above", "wall time, s", time.perf_counter() - t0, None, True)
+    return rows

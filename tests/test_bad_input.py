@@ -1,0 +1,238 @@
+"""Bad input (CONTRACT.md): exit status 2, one clear line, no traceback, nothing written; and
+any valid set of parameters gives finite histories or a clear error.
+
+The mistakes are generated from each case's parameter specs, so a new key is covered as soon
+as it is declared. The property tests run tiny windows (at most 4 steps, few harmonics, refine
+at most 2; the reference solver in 2D) so that a hundred examples take well under a minute.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, event, given, settings, strategies as st
+from hypothesis.control import currently_in_test_context
+
+from cases import CASES, ParameterError, get_case, parse_sets
+from cases.params import MAX_STEPS
+from smfem import cli
+from smfem.cli import main
+from smfem.stability_study import bad_input, cli_outcome
+
+
+def run_cli(args, capsys) -> tuple[int, str]:
+    code = main(args)
+    captured = capsys.readouterr()
+    return code, captured.err.strip()
+
+
+def assert_one_clear_line(err: str, needle: str):
+    assert "Traceback" not in err
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith("smfem: error: ") and needle in err, err
+
+
+@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("solver", ["smfem", "reference"])
+def test_every_key_out_of_range_exits_2_naming_the_key(name, solver):
+    """Every key of every case, every kind of bad value (past each bound, the open bounds, nan,
+    inf, -inf, wrong types): exit 2, one line naming the key and its allowed range, nothing
+    written."""
+    rows = bad_input((solver,), (name,))
+    assert len(rows) > 5 * len(CASES[name].SPECS)
+    for r in rows:
+        assert r["code"] == 2, r
+        assert_one_clear_line(r["message"], r["set"].partition("=")[0])
+        assert r["names_range"] and not r["written"], r
+
+
+@pytest.mark.parametrize(
+    "args,needle",
+    [
+        (["run", "no_such_case"], "unknown case"),
+        (["run", "dome", "--set", "bogus=1"], "unknown key 'bogus'"),
+        (["run", "dome", "--set", "contrast=0.5"], "unknown key 'contrast'"),  # another case's key
+        (["run", "dome", "--set", "dt"], "malformed --set"),
+        (["run", "dome", "--set", "=1"], "malformed --set"),
+        (["run", "dome", "--set", "dt="], "malformed --set"),
+        (["run", "dome", "--set", "dt==1"], "is not a value"),
+        (["run", "dome", "--set", "dt=1e-5)"], "is not a value"),
+        (["run", "dome", "--set", "dt=" + "(" * 200], "is not a value"),
+        (["run", "dome", "--set", "dt=" + "9" * 400], "dt"),  # an integer beyond the float range
+        (["run", "dome", "--set", "dt=1e-5", "--set", "t_end=1e-6"], "must not exceed t_end"),
+        (["run", "dome", "--set", "dt=1e-9", "--set", "t_end=1"], f"at most {MAX_STEPS} time steps"),
+        (["run", "notched_strip", "--set", "notch_depth=0.05"], "notch_depth"),  # the probe would be in the void
+        (["run", "dome", "--set", "q=0"], "nothing moves"),  # a valid value, a clear refusal by the solver
+        (["run", "dome", "--solver", "ansys"], "invalid choice"),
+        (["run"], "required: case"),
+    ],
+)
+def test_user_mistakes_exit_2_with_one_line(tmp_path, capsys, args, needle):
+    out = tmp_path / "out"
+    code, err = run_cli(args + ["--out", str(out)], capsys)
+    assert code == 2
+    assert_one_clear_line(err, needle)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("where", ["under a file", "is a file", "in /proc"])
+@pytest.mark.parametrize("solver", ["smfem", "reference"])
+def test_unwritable_out_exits_2_before_any_work(tmp_path, capsys, monkeypatch, where, solver):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    out = {"under a file": blocker / "sub" / "deeper", "is a file": blocker, "in /proc": Path("/proc/smfem-out")}[where]
+    monkeypatch.setattr(cli, "solver_function", lambda name: pytest.fail("the solver ran"))
+    code, err = run_cli(["run", "dome", "--solver", solver, "--out", str(out)], capsys)
+    assert code == 2
+    assert_one_clear_line(err, "--out")
+    assert blocker.read_text() == "" and sorted(tmp_path.iterdir()) == [blocker]
+
+
+def test_out_of_memory_is_one_line_not_a_traceback(tmp_path, capsys, monkeypatch):
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(cli, "solver_function", lambda name: exhausted)
+    code, err = run_cli(["run", "dome", "--out", str(tmp_path / "out")], capsys)
+    assert code == 2
+    assert_one_clear_line(err, "out of memory")
+    assert not (tmp_path / "out").exists()
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(st.one_of(
+    st.text(max_size=40),
+    st.builds("{}={}".format, st.sampled_from([*CASES["dome"].SPECS, "bogus", ""]),
+              st.one_of(st.text(max_size=20), st.floats().map(repr), st.integers().map(str))),
+))
+def test_any_set_text_parses_or_raises_parameter_error(text):
+    """Whatever follows ``--set``: a valid case, or ParameterError with one line; nothing else
+    escapes."""
+    try:
+        get_case("dome", parse_sets([text]))
+    except ParameterError as exc:
+        assert len(str(exc).splitlines()) == 1, str(exc)
+
+
+# --- valid parameters: finite histories or a clear error ---------------------------------------------
+
+#: keep the property runs tiny
+MAX_HARMONICS, MAX_REFINE, MAX_STEPS_RUN = 6, 2, 4
+
+
+def valid_value(key, spec):
+    """A strategy over the values ``spec`` accepts: log-uniform over positive ranges (so every
+    decade is tried), with the bounds themselves."""
+    if spec.type is bool:
+        return st.booleans()
+    if spec.choices is not None:
+        return st.sampled_from(spec.choices)
+    if spec.type is int:
+        cap = {"harmonics": MAX_HARMONICS, "refine": MAX_REFINE}.get(key, spec.hi)
+        return st.integers(spec.lo, min(spec.hi, cap))
+    lo, hi = spec.lo, spec.hi
+    if lo > 0:
+        first = math.nextafter(lo, math.inf) if spec.open_lo else lo
+        last = math.nextafter(hi, 0.0) if spec.open_hi else hi
+        inside = st.floats(math.log10(lo), math.log10(hi)).map(lambda e: min(max(10.0**e, first), last))
+        edges = [b for b, is_open in ((lo, spec.open_lo), (hi, spec.open_hi)) if not is_open]
+        return st.one_of(st.sampled_from(edges), inside) if edges else inside
+    return st.floats(lo, hi, exclude_min=spec.open_lo, exclude_max=spec.open_hi)
+
+
+@st.composite
+def valid_run(draw, solver="smfem", max_refine=MAX_REFINE):
+    """``(case name, solver, --set values)`` of a tiny run with valid parameters."""
+    name = draw(st.sampled_from(sorted(CASES)))
+    specs = CASES[name].SPECS
+    sets = {key: draw(valid_value(key, spec)) for key, spec in specs.items()
+            if key not in ("dt", "t_end", "dim", "refine") and draw(st.booleans())}
+    sets["refine"] = draw(st.integers(1, max_refine))
+    sets.setdefault("harmonics", draw(st.integers(1, MAX_HARMONICS)))  # the strip's default is 80
+    sets["dim"] = 2  # the 3-D reference is minutes at the extremes; test_cli covers it
+    dt = draw(valid_value("dt", specs["dt"])) if draw(st.booleans()) else CASES[name].DEFAULTS["dt"]
+    sets["dt"], sets["t_end"] = dt, dt * draw(st.integers(1, MAX_STEPS_RUN))
+    return name, solver, sets
+
+
+#: the reference FEM raises this (SuperLU) where an ideally plastic body has collapsed and
+#: inertia no longer holds it; see test_quasi_static_collapse_is_a_clear_error. The property
+#: tests step over it so as to keep searching for other failures.
+KNOWN_REFERENCE_DEFECT = ("failed to factorize", "Factor is exactly singular")
+
+
+def note(text):
+    if currently_in_test_context():
+        event(text)
+
+
+def run_args(name, solver, sets) -> list[str]:
+    return ["run", name, "--solver", solver, "--quiet", "--no-fields",
+            *(arg for k, v in sets.items() for arg in ("--set", f"{k}={v!r}"))]
+
+
+def check_run(name, solver, sets):
+    """Run through the command line; return the exit status after checking the contract."""
+    try:
+        o = cli_outcome(run_args(name, solver, sets))  # an exception here is the traceback the contract forbids
+    except RuntimeError as exc:
+        if solver == "reference" and any(text in str(exc) for text in KNOWN_REFERENCE_DEFECT):
+            note("reference: the known collapse defect")
+            return None
+        raise
+    code, err = o["code"], o["stderr"]
+    note(f"{name} {solver}: exit {code}")
+    assert code in (0, 2, 3), (code, err)
+    if code == 2:
+        assert_one_clear_line(err, "")
+        assert not o["written"]
+        return code
+    assert np.isfinite(o["history"].to_numpy()).all(), (code, err)
+    if code == 3:  # the message names the step; the history up to it is written
+        assert err.startswith(f"smfem: {name}: ") and "step" in err, err
+    else:
+        assert len(o["history"]) == get_case(name, sets).n_steps + 1
+    return code
+
+
+@settings(max_examples=80, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(valid_run())
+def test_valid_parameters_give_finite_histories_or_a_clear_error(run):
+    check_run(*run)
+
+
+@settings(max_examples=15, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(valid_run("reference", max_refine=1))
+def test_valid_parameters_reference_solver(run):
+    check_run(*run)
+
+
+@pytest.mark.parametrize("solver", [
+    "smfem",
+    pytest.param("reference", marks=pytest.mark.xfail(
+        strict=True, raises=RuntimeError,
+        reason="reference_fem: SuperLU cannot factorize the singular tangent of a collapsed, quasi-static "
+        "ideally plastic strip; it should end as not converged (exit 3), not raise")),
+])
+def test_quasi_static_collapse_is_a_clear_error(solver):
+    """Ideal plasticity far beyond the collapse load with a step so long that inertia vanishes
+    (tau_s = 100 Pa under 0.85e8 Pa, dt = 1000 s): found by the property test below."""
+    o = cli_outcome(run_args("notched_strip", solver, {"harmonics": 4, "tau_s": 100.0, "dt": 1000.0, "t_end": 3000.0}))
+    assert o["code"] in (0, 3) and np.isfinite(o["history"].to_numpy()).all()
+
+
+@pytest.mark.slow
+@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(valid_run())
+def test_valid_parameters_many_random_examples(run):
+    check_run(*run)
+
+
+@pytest.mark.slow
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(valid_run("reference"))
+def test_valid_parameters_many_random_examples_reference_solver(run):
+    check_run(*run)
