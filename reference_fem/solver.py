@@ -20,6 +20,7 @@ from .mesh import build_mesh, mirror_permutation
 from .model import INTORDER, Model
 from .newmark import march
 from .probes import Probes
+from .zones import snapshot as zone_snapshot
 from .wall import ContactLog, WallSystem, case_wall_rows
 
 
@@ -47,6 +48,8 @@ class ReferenceResult:
         with a wall also 'contact_nodes', 'energy_before' and 'energy_after' (kinetic + strain,
         J, at t = 0 and at the last step), 'contact_window' (first and last time with a wall
         force, s, or None) and 'max_penetration' (m, over all nodes and steps; 0 if none)
+    snapshots : plastic strain at the case's plastic-zone times (2D plastic runs), as
+        :mod:`reference_fem.zones` makes them
     """
 
     t: np.ndarray
@@ -58,6 +61,7 @@ class ReferenceResult:
     cpu_time_s: float
     mesh: meshio.Mesh | None
     info: dict = field(default_factory=dict)
+    snapshots: list = field(default_factory=list)
 
 
 def _system(model: Model, c: float):
@@ -102,6 +106,8 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> Reference
         log.record(0.0, zero, v0, u_full)
     times, rows, iterations = [0.0], [probes.values(u_full, system, v_full)], []
     converged, message = True, ""
+    zone_steps = {int(round(t / dt)) for t in case.references.get("plastic_zone_times", ())}
+    snapshots = []
     steps = march(system, model.Q[free], zero, v0, dt, n_steps)
     try:
         for n, t, u, v, a, its in steps:
@@ -109,6 +115,8 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> Reference
             times.append(t)
             rows.append(probes.values(u_full, system, v_full, a_full))
             iterations.append(its)
+            if n in zone_steps and case.material.plastic and model.dim == 2:
+                snapshots.append(zone_snapshot(t, model, system))
             if log:
                 log.record(t, u, v, u_full)
             if progress is not None:
@@ -120,7 +128,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> Reference
     history = {name: np.array([r[k] for r in rows]) for k, name in enumerate(probes.names)}
     return ReferenceResult(
         t=np.array(times), history=history, n_dof=int(free.size), iterations=iterations,
-        converged=converged, message=message, cpu_time_s=cpu,
+        converged=converged, message=message, cpu_time_s=cpu, snapshots=snapshots,
         mesh=output_mesh(model, u_full, system),
         info=dict(_info(model, system, cpu_mesh), **(log.info() if log else {})),
     )

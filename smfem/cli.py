@@ -39,6 +39,13 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", default=None, help="output directory (default: out/CASE-SOLVER)")
     run.add_argument("--no-fields", action="store_true", help="do not write fields.vtu")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    cmp = sub.add_parser("compare", help="run a case with SMFEM and the reference FEM and compare them")
+    cmp.add_argument("case")
+    cmp.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
+                     help="for both solvers")
+    cmp.add_argument("--smfem-set", dest="smfem_sets", action="append", default=[], metavar="KEY=VALUE")
+    cmp.add_argument("--reference-set", dest="reference_sets", action="append", default=[], metavar="KEY=VALUE")
+    cmp.add_argument("--out", default=None, help="output directory (default: out/CASE-compare)")
     add_commands(sub)
     return p
 
@@ -106,13 +113,30 @@ def run(args) -> int:
     return 0
 
 
+def compare(args) -> int:
+    both = parse_sets(args.sets)
+    s_case = get_case(args.case, {**both, **parse_sets(args.smfem_sets)})
+    r_case = get_case(args.case, {**both, **parse_sets(args.reference_sets)})
+    out = Path(args.out or f"out/{s_case.name}-compare")
+    check_writable(out)
+    from smfem.compare import compare as run_both
+
+    table = run_both(s_case, r_case, out)
+    print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    print(f"-> {out}")
+    return 0
+
+
+COMMANDS = {"run": run, "compare": compare}
+
+
 def main(argv=None) -> int:
     try:
         args = build_parser().parse_args(argv)
         if args.command == "cases":
             print(list_cases())
             return 0
-        return run(args) if args.command == "run" else run_command(args)
+        return COMMANDS[args.command](args) if args.command in COMMANDS else run_command(args)
     except (UsageError, ParameterError, UnsupportedCase) as exc:
         print(f"smfem: error: {exc}", file=sys.stderr)
         return EXIT_USAGE

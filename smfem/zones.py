@@ -41,6 +41,13 @@ def smfem_snapshot(t: float, model, case, peps: np.ndarray) -> dict:
     return {"t": t, "poly": poly.reshape(-1, 4, 2), "peps": value.ravel()}
 
 
+def plastic_area(snapshot: dict, threshold: float = 1e-3) -> float:
+    """Area of the cells whose peps reaches ``threshold`` (plotting-plane units squared)."""
+    poly = snapshot["poly"][snapshot["peps"] >= threshold]
+    x, y = poly[..., 0], poly[..., 1]
+    return float(0.5 * np.abs((x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y).sum(axis=1)).sum())
+
+
 def save(snapshots: list[dict], path) -> None:
     """Snapshots as one ``.npz`` (``t``, and ``poly_k``/``peps_k`` per snapshot k)."""
     arrays = {"t": np.array([s["t"] for s in snapshots])}

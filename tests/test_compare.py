@@ -1,0 +1,29 @@
+"""``smfem compare``: both solvers' runs, the comparison table and the plastic zones side by side."""
+
+import numpy as np
+import pandas as pd
+from PIL import Image
+
+from smfem import zones
+from smfem.cli import main
+
+
+def test_compare_writes_both_runs_the_table_and_zones_side_by_side(tmp_path, capsys):
+    # the first two of the paper's zone times (1.4 and 2.28 ms)
+    assert main(["compare", "thick_cylinder", "--set", "plastic=true", "--set", "t_end=2.4e-3",
+                 "--out", str(tmp_path)]) == 0
+    table = pd.read_csv(tmp_path / "comparison.csv")
+    assert list(table.probe) == ["A_ur", "B_ut", "C_ur", "peps_A", "peps_max", "plastic_area@0.0014",
+                                 "plastic_area@0.00228"]
+    assert np.isfinite(table.relative_error).all()
+    displacement = table[table.measure == "max-norm"]
+    assert (displacement.relative_error < 0.05).all()  # the paper's mesh on both sides
+    for solver in ("smfem", "reference"):
+        assert (tmp_path / solver / "history.csv").exists() and (tmp_path / solver / "summary.json").exists()
+        snaps = zones.load(tmp_path / solver / "plastic_zones.npz")
+        assert [round(s["t"], 6) for s in snaps] == [1.4e-3, 2.28e-3]
+        assert (snaps[0]["peps"] >= 1e-3).sum() == 0 < (snaps[1]["peps"] >= 1e-3).sum()  # yielding starts between
+    with Image.open(tmp_path / "plastic_zones.png") as im:
+        width, height = im.size
+    assert height > 0.8 * width  # two rows of panels: SMFEM above the reference
+    assert "peps_max" in capsys.readouterr().out
