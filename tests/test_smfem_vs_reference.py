@@ -10,6 +10,7 @@ import pytest
 from cases import get_case
 from reference_fem import solve as reference
 from smfem.compare import probe_error
+from smfem.zones import plastic_area
 from smfem.solver import solve as smfem
 
 
@@ -35,3 +36,51 @@ def test_elastic_displacement_probes_within_two_percent(name, smfem_sets, refere
     r = reference(get_case(name, reference_sets))
     for probe, h in s.history.items():
         assert error(h, r.history[probe]) < 0.02, probe
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "name,smfem_sets,reference_sets",
+    [
+        # measured: A 0.40 %, B 1.09 %, C 0.29 %; peaks peps_A +0.08 %, peps_max -6.2 %
+        # (at the paper's meshes: B 2.6 %, peps_max -9.7 %: the maximum sits on the outer surface
+        # under the patch edge, where each solver samples at its own Gauss points)
+        ("thick_cylinder", {"plastic": True, "refine": 2, "harmonics": 40}, {"plastic": True, "refine": 2}),
+        # measured: 1.18 % (refine 2 on both sides: 3.9 %)
+        ("dome", {"plastic": True, "refine": 4}, {"plastic": True, "refine": 4}),
+    ],
+)
+def test_plastic_displacements_within_five_percent_and_peaks_within_ten(name, smfem_sets, reference_sets):
+    s = smfem(get_case(name, smfem_sets), with_fields=False)
+    r = reference(get_case(name, reference_sets))
+    assert s.converged and r.converged
+    for probe, h in s.history.items():
+        measure, value = probe_error(probe, h, r.history[probe])
+        assert abs(value) < (0.10 if measure == "peak difference" else 0.05), (probe, value)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "name,smfem_sets,reference_sets",
+    [
+        # measured: D 1.38 %, E 3.57 %, F 1.53 % (SMFEM refine 4 against reference refine 3:
+        # 1.06 / 2.61 / 1.06 %)
+        ("notched_cylinder", {"refine": 2, "harmonics": 40}, {"refine": 2}),
+        # measured: 1.85 % (120 harmonics; 80: 7.6 %)
+        ("notched_strip", {"harmonics": 120}, {}),
+    ],
+)
+def test_plastic_notched_displacements_within_five_percent(name, smfem_sets, reference_sets):
+    """Displacements only: the plastic-strain probes of the notched scenes do not agree yet
+    (issue 4's note: peps_max sits on a re-entrant corner and grows with every refinement of
+    the reference; the strip's notch probes are 28-42 % below the reference)."""
+    s = smfem(get_case(name, smfem_sets), with_fields=False)
+    r = reference(get_case(name, reference_sets))
+    assert s.converged and r.converged
+    for probe, h in s.history.items():
+        if not probe.startswith("peps"):
+            assert error(h, r.history[probe]) < 0.05, probe
+    if name == "notched_cylinder":
+        # the zones themselves agree: areas measured +1.5 %, +0.2 %, -6.7 % at 6, 8, 10 ms
+        for a, b in zip(s.snapshots, r.snapshots, strict=True):
+            assert abs(plastic_area(a) / plastic_area(b) - 1) < 0.10, a["t"]
