@@ -95,7 +95,10 @@ class Plastic(Elastic):
         By = self.B[(y[:, None] * nc + np.arange(nc)).ravel()]
         dK = By.T @ (forms.material_blocks(ret.tangent[y] - self.model.D, self.model.weights[y]) @ By)
         self.factorizations += 1
-        return sla.splu((self.A + dK).tocsc())
+        try:
+            return sla.splu((self.A + dK).tocsc())
+        except RuntimeError as exc:  # SuperLU: a singular tangent (collapse without inertia)
+            raise NotConverged(f"the tangent is singular ({exc}): the body has collapsed") from None
 
     def solve(self, rhs, u):
         ret = self._return(u)

@@ -155,32 +155,68 @@ class ContactLayer:
         return float(self.area @ self.stress(strain, state)[:, NORMAL] / self.area.sum())
 
 
+def face_free_mass(model, edge: str) -> np.ndarray:
+    """Lumped mass (3 n_nodes,) with the face nodes' mass moved to the next row inside.
+
+    A massive face node on the stiff layer is an oscillator far above what dt resolves:
+    Newmark leaves it undamped and the contact pressure rings at the Nyquist frequency. With
+    massless contact nodes (mass redistribution, Khenous, Laborde & Renard 2008) the face
+    follows quasi-statically; the total mass is kept.
+    """
+    m = model.full_mass(0, 0).reshape(-1, 3).copy()
+    ns, nt = model.mesh.shape
+    grid = np.arange(model.mesh.n_nodes).reshape(nt + 1, ns + 1)
+    face, inside = {"s_min": (grid[:, 0], grid[:, 1]), "s_max": (grid[:, -1], grid[:, -2]),
+                    "t_min": (grid[0], grid[1]), "t_max": (grid[-1], grid[-2])}[model.mesh.section.edge(edge)]
+    m[inside] += m[face]
+    m[face] = 0.0
+    return m.ravel()
+
+
 class ContactNewmark:
     """Average-acceleration Newmark of a harmonic-0 model with a contact layer.
 
     Each step iterates: solve with the layer matrix of the current states, re-evaluate the
-    states from the new displacements, until no state changes. Factorizations are cached by
-    the pattern of states, so a settled contact costs one back-substitution per step.
+    states from the new displacements, until no state changes. ``K + a0 M`` is factorized once:
+    the layer touches only the face dofs, so ``(K + a0 M + P' k P) x = b`` is solved as
+    ``x = y - Z c`` with ``y = A0^-1 b``, ``Z = A0^-1 P'`` (computed once) and the small dense
+    system ``(I + k S) c = k P y``, ``S = P Z`` (Woodbury, with ``k`` the layer's face block).
     """
 
-    def __init__(self, model, layer: ContactLayer, dt: float):
+    def __init__(self, model, layer: ContactLayer, dt: float, massless_face: bool = True):
         s = model.systems[0]
-        self.K, self.M, self.Q, self.layer = s.K, s.M, s.Q, layer
+        self.K, self.Q, self.layer = s.K, s.Q, layer
+        # massless_face=False keeps the face nodes' mass: only to show what it does (tests)
+        self.m_full = face_free_mass(model, model.case.wall.edge) if massless_face else model.full_mass(0, 0)
+        self.M = s.T.multiply(s.T).T @ self.m_full
         self.c = newmark_constants(dt)
-        self.cache: dict[bytes, object] = {}
-        self.factorizations = 0
+        self.lu = sla.splu((self.K + sp.diags(self.c.a0 * self.M)).tocsc())
+        self.factorizations = 1
+        # the reduced dofs any layer state can touch, and the solution's response to them
+        every = np.full(len(layer.state), STICK)
+        self.face = np.unique(layer.stiffness(every).tocoo().row)
+        P = np.zeros((len(self.M), len(self.face)))
+        P[self.face, np.arange(len(self.face))] = 1.0
+        self.Z = self.lu.solve(P)
+        self.S = self.Z[self.face]
+        self.face_blocks: dict[bytes, np.ndarray] = {}
         self.max_closure = 0.0  # largest layer compression over the run, in layer thicknesses
 
-    def _lu(self, state: np.ndarray):
+    def _solve(self, state: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        y = self.lu.solve(rhs)
         key = state.tobytes()
-        if key not in self.cache:
-            A = self.K + self.layer.stiffness(state) + sp.diags(self.c.a0 * self.M)
-            self.cache[key] = sla.splu(A.tocsc())
-            self.factorizations += 1
-        return self.cache[key]
+        if key not in self.face_blocks:  # a few patterns recur over a run
+            self.face_blocks[key] = self.layer.stiffness(state)[self.face][:, self.face].toarray()
+        k = self.face_blocks[key]
+        if not k.any():
+            return y
+        c = np.linalg.solve(np.eye(len(k)) + k @ self.S, k @ y[self.face])
+        return y - self.Z @ c
 
     def initial_acceleration(self, u: np.ndarray) -> np.ndarray:
-        return (self.Q - self.K @ u) / self.M
+        """``M a = Q - K u``; the massless face nodes carry no initial acceleration."""
+        force = self.Q - self.K @ u
+        return np.divide(force, self.M, out=np.zeros_like(force), where=self.M > 0)
 
     def step(self, u, v, a, step_index: int, t: float):
         """One step; returns ``(u, v, a, iterations, strain, state)``."""
@@ -190,7 +226,7 @@ class ContactNewmark:
         for iteration in range(1, MAX_STATE_ITERATIONS + 1):
             seen.add(state.tobytes())
             rhs = self.Q + c.a0 * self.M * predicted - layer.offset_force(state)
-            new = self._lu(state).solve(rhs)
+            new = self._solve(state, rhs)
             strain = layer.centre_strain(layer.T @ new)
             next_state = layer.states_of(strain)
             if np.array_equal(next_state, state):

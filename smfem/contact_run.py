@@ -28,14 +28,15 @@ def _energy(stepper, layer, u, v, strain, state) -> float:
     return float(rod + 0.5 * np.einsum("er,er,e->", sigma, total_strain, layer.ops.sqrt_g))
 
 
-def solve_contact(case, model, progress, with_fields, cpu0) -> RunResult:
+def solve_contact(case, model, progress=None, with_fields=False, cpu0=None, massless_face=True) -> RunResult:
+    cpu0 = time.process_time() if cpu0 is None else cpu0
     p = case.params
     layer = ContactLayer(model, p["layer_thickness"], p["layer_stiffness"] * case.material.E)
-    stepper = ContactNewmark(model, layer, case.dt)
+    stepper = ContactNewmark(model, layer, case.dt, massless_face)
     linear = [q for q in case.probes if q.kind == "point"]
     probes = ProbeSet(model, linear)
     T = model.systems[0].T
-    m_full = model.full_mass(0, 0)
+    m_full = stepper.m_full
     axial = np.zeros_like(m_full)
     axial[1::3] = m_full[1::3]  # x2 = z is the axis of the rod
     velocity_row = (T.T @ axial) / axial.sum()

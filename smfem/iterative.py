@@ -142,8 +142,9 @@ class BlockIterative:
             self.timings["synthesis"] += t1 - t0
             self.timings["stress"] += tick() - t1
             size2 = sum(x @ x for x in new)
-            if not np.isfinite(change2):
-                break
+            if not (np.isfinite(change2) and np.isfinite(size2)):
+                raise NotConverged(f"step {step_index} (t = {t:.6g} s) diverged at iteration {iteration}: "
+                                   f"the amplitudes are no longer finite")
             if change2 <= self.tol**2 * max(size2, 1e-300):
                 self.state = PointState(sigma, self.state.eps_p + deps_p, alpha)
                 accel = [c.a0 * (x - p) for x, p in zip(new, predicted)]

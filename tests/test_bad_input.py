@@ -158,12 +158,6 @@ def valid_run(draw, solver="smfem", max_refine=MAX_REFINE):
     return name, solver, sets
 
 
-#: the reference FEM raises this (SuperLU) where an ideally plastic body has collapsed and
-#: inertia no longer holds it; see test_quasi_static_collapse_is_a_clear_error. The property
-#: tests step over it so as to keep searching for other failures.
-KNOWN_REFERENCE_DEFECT = ("failed to factorize", "Factor is exactly singular")
-
-
 def note(text):
     if currently_in_test_context():
         event(text)
@@ -176,13 +170,7 @@ def run_args(name, solver, sets) -> list[str]:
 
 def check_run(name, solver, sets):
     """Run through the command line; return the exit status after checking the contract."""
-    try:
-        o = cli_outcome(run_args(name, solver, sets))  # an exception here is the traceback the contract forbids
-    except RuntimeError as exc:
-        if solver == "reference" and any(text in str(exc) for text in KNOWN_REFERENCE_DEFECT):
-            note("reference: the known collapse defect")
-            return None
-        raise
+    o = cli_outcome(run_args(name, solver, sets))  # an exception here is the traceback the contract forbids
     code, err = o["code"], o["stderr"]
     note(f"{name} {solver}: exit {code}")
     assert code in (0, 2, 3), (code, err)
@@ -210,13 +198,7 @@ def test_valid_parameters_reference_solver(run):
     check_run(*run)
 
 
-@pytest.mark.parametrize("solver", [
-    "smfem",
-    pytest.param("reference", marks=pytest.mark.xfail(
-        strict=True, raises=RuntimeError,
-        reason="reference_fem: SuperLU cannot factorize the singular tangent of a collapsed, quasi-static "
-        "ideally plastic strip; it should end as not converged (exit 3), not raise")),
-])
+@pytest.mark.parametrize("solver", ["smfem", "reference"])
 def test_quasi_static_collapse_is_a_clear_error(solver):
     """Ideal plasticity far beyond the collapse load with a step so long that inertia vanishes
     (tau_s = 100 Pa under 0.85e8 Pa, dt = 1000 s): found by the property test below."""

@@ -6,6 +6,7 @@ import pytest
 
 from cases import get_case
 from smfem.contact import NORMAL, SHEAR, SLIP_NEG, SLIP_POS, STICK, ContactLayer
+from smfem.contact_run import solve_contact
 from smfem.model import Model
 from smfem.solver import solve
 
@@ -16,7 +17,8 @@ def rod(**sets):
 
 
 def test_nu0_rod_against_one_dimensional_theory():
-    # measured: plateau +0.17 %, contact duration +0.66 %, rebound -0.98 %, energy +0.05 %
+    # measured: plateau +0.20 %, contact duration +0.66 %, rebound -1.3 % (dt: the reference
+    # FEM shows -1.0 % at this dt and -0.6 % at dt / 2), energy conserved to 1e-6
     case, r = rod(nu=0.0)
     th = case.references["rod_theory"]
     assert r.converged, r.message
@@ -31,7 +33,7 @@ def test_nu0_rod_against_one_dimensional_theory():
     assert before == pytest.approx(0.5 * case.material.rho * np.pi * 0.05**2 * 1.0 * 5.0**2, rel=1e-9)  # J, whole rod
     assert abs(after / before - 1) < 0.01
     # while in contact the face stays on the wall: the layer is compressed, never crossed
-    assert 0 < r.info["max_layer_compression"] < 0.1
+    assert 0 < r.info["max_layer_compression"] < 0.01
     assert np.all(r.history["contact_p"] <= 1e-6 * abs(th["stress"]))
 
 
@@ -88,17 +90,30 @@ def test_face_through_the_wall_is_reported():
     assert not r.converged and "through the wall" in r.message and "step" in r.message
 
 
+def _with_massive_face(**sets):
+    """The run as it would be with the face nodes' mass kept (what mass redistribution cures)."""
+    case = get_case("rod_impact", sets)
+    return solve_contact(case, Model(case), massless_face=False)
+
+
 def test_chattering_states_are_reported():
-    # a layer far stiffer than dt resolves (its period < dt) makes the states cycle near release
-    case, r = rod(nu=0.0, layer_stiffness=1.0)
+    # a massive face node on a layer far stiffer than dt resolves rings; its states cycle
+    r = _with_massive_face(nu=0.0, layer_stiffness=1.0)
     assert not r.converged and "chattering" in r.message
 
 
-def test_energy_created_by_a_too_stiff_layer_is_reported():
-    # E_l = 0.3 E: states switch unseen between steps and the rod leaves with far more energy
-    case, r = rod(nu=0.0, layer_stiffness=0.3)
+def test_energy_created_by_contact_is_reported():
+    r = _with_massive_face(nu=0.0, layer_stiffness=0.3)
     assert not r.converged and "created energy" in r.message
     assert r.info["energy_after"] > 1.5 * r.info["energy_before"]
+
+
+def test_massless_face_conserves_energy_whatever_the_layer_stiffness():
+    # measured: energy change < 1e-4 and rebound -1.3 % for E_l = 0.01 E ... 10 E
+    for stiffness in (0.03, 1.0, 10.0):
+        case, r = rod(nu=0.0, layer_stiffness=stiffness, t_end=4.5e-4)
+        assert r.converged, r.message
+        assert abs(r.info["energy_after"] / r.info["energy_before"] - 1) < 1e-3
 
 
 def test_contact_run_writes_the_contract_files(tmp_path):
@@ -110,3 +125,40 @@ def test_contact_run_writes_the_contract_files(tmp_path):
     table = pd.read_csv(tmp_path / "history.csv")
     assert list(table.columns) == ["t", "mid_szz", "contact_p", "end_uz", "rod_vz"] and len(table) == 51
     assert np.isfinite(table.values).all()
+
+
+def transit_filtered(x: np.ndarray, case) -> np.ndarray:
+    """Moving average over the time a wave takes to cross the rod's diameter (2 R / c).
+
+    The ringing behind a wave front shorter than that is the discretization's own: it changes
+    by 29 % (reference, refine 1 to 2) and 38 % (SMFEM, refine 1 to 4) in L2 between meshes, so
+    no two models agree on it; what both resolve is the history seen through this window.
+    """
+    w = int(round(2 * 0.05 / np.sqrt(case.material.E / case.material.rho) / case.dt))
+    padded = np.concatenate([np.full(w, x[0]), x, np.full(w, x[-1])])
+    return np.convolve(padded, np.ones(w) / w, mode="same")[w:-w]
+
+
+def test_nu03_displacement_and_velocity_histories_agree_with_the_reference():
+    from reference_fem import solve as reference
+
+    # measured: end_uz 0.83 %, rod_vz 0.68 % (max-norm, unfiltered, both at refine 1)
+    case = get_case("rod_impact", {"nu": 0.3})
+    s, r = solve(case, with_fields=False), reference(case)
+    for probe in ("end_uz", "rod_vz"):
+        a, b = s.history[probe], r.history[probe]
+        assert np.abs(a - b).max() / np.abs(b).max() < 0.05, probe
+
+
+@pytest.mark.slow
+def test_nu03_stress_histories_agree_with_the_reference_through_the_transit_window():
+    from reference_fem import solve as reference
+
+    # measured (SMFEM refine 8, 64.9k dof / reference refine 2, 16.4k dof): mid_szz 4.40 %,
+    # contact_p 1.95 %, end_uz 0.08 %, rod_vz 0.01 %; SMFEM refine 4: mid_szz 6.6 %
+    s = solve(get_case("rod_impact", {"nu": 0.3, "refine": 8}), with_fields=False)
+    case = get_case("rod_impact", {"nu": 0.3, "refine": 2})
+    r = reference(case)
+    for probe, a in s.history.items():
+        fa, fb = transit_filtered(a, case), transit_filtered(r.history[probe], case)
+        assert np.abs(fa - fb).max() / np.abs(fb).max() < 0.05, probe
