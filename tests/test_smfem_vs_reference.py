@@ -21,7 +21,7 @@ def error(a, b):
 @pytest.mark.parametrize(
     "name,smfem_sets,reference_sets",
     [
-        # measured: 1.77 % (SMFEM refine 1: 5.9 %, refine 4: 0.51 %)
+        # measured: 1.50 % (SMFEM refine 1: 5.8 %, refine 4: 0.37 %)
         ("dome", {"refine": 2}, {"refine": 4}),
         # measured: A 0.06 %, B 0.50 %, C 0.04 %; B_ut on the patch edge needs 80 harmonics (2.1 % at 20)
         ("thick_cylinder", {"refine": 4, "harmonics": 80}, {"refine": 3}),
@@ -71,9 +71,10 @@ def test_plastic_displacements_within_five_percent_and_peaks_within_ten(name, sm
     ],
 )
 def test_plastic_notched_displacements_within_five_percent(name, smfem_sets, reference_sets):
-    """Displacements only: the plastic-strain probes of the notched scenes do not agree yet
-    (issue 4's note: peps_max sits on a re-entrant corner and grows with every refinement of
-    the reference; the strip's notch probes are 28-42 % below the reference)."""
+    """Displacements and zones: the notched scenes' plastic-strain probes are not comparable.
+    The cylinder's peps_max sits on a re-entrant corner and grows by 61 % and 54 % with each
+    refinement of the reference; the strip's notch probes are 28-42 % below the reference,
+    from the notch's representation (see the test without the notch below)."""
     s = smfem(get_case(name, smfem_sets), with_fields=False)
     r = reference(get_case(name, reference_sets))
     assert s.converged and r.converged
@@ -84,3 +85,16 @@ def test_plastic_notched_displacements_within_five_percent(name, smfem_sets, ref
         # the zones themselves agree: areas measured +1.5 %, +0.2 %, -6.7 % at 6, 8, 10 ms
         for a, b in zip(s.snapshots, r.snapshots, strict=True):
             assert abs(plastic_area(a) / plastic_area(b) - 1) < 0.10, a["t"]
+
+
+def test_plastic_strip_without_the_notch_agrees_to_its_plastic_strains():
+    """The control for the notched strip: without the notch SMFEM and the reference agree on
+    the plastic strains too (measured: mid_uz 0.3 %, peaks peps_notch +2.2 %, peps_top -0.4 %
+    at 40 harmonics), so the notched scene's 28-42 % gap comes from the notch itself: absent
+    material along x3, truncated at finitely many harmonics, against the real sharp notch."""
+    s = smfem(get_case("notched_strip", {"notch_depth": 0.0, "harmonics": 40}), with_fields=False)
+    r = reference(get_case("notched_strip", {"notch_depth": 0.0}))
+    assert s.converged and r.converged
+    for probe, h in s.history.items():
+        measure, value = probe_error(probe, h, r.history[probe])
+        assert abs(value) < (0.10 if measure == "peak difference" else 0.05), (probe, value)
