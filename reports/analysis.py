@@ -23,14 +23,15 @@ HEADLINE_MEASURE = "max over displacement, velocity and stress probes of the rel
 
 
 def _h(runs) -> tuple[str, list[float]]:
-    """The resolution parameter of a series (the first of refine, harmonics, dt that varies)
-    and its mesh-size-like value per run (1/refine, 1/harmonics, dt)."""
+    """The resolution parameter of a series and its mesh-size-like value per run (1/refine,
+    1/harmonics or dt): the key with the most distinct values along the series (the first of
+    refine, harmonics, dt on a tie); ``''`` when none varies."""
     params = [r.summary["params"] for r in runs]
-    for key in RESOLUTION_KEYS:
-        values = [p[key] for p in params]
-        if len(set(values)) > 1:
-            return (f"1/{key}", [1.0 / v for v in values]) if key != "dt" else ("dt", values)
-    return "", [math.nan] * len(runs)
+    distinct = {key: len({p[key] for p in params}) for key in RESOLUTION_KEYS}
+    key = max(RESOLUTION_KEYS, key=lambda k: distinct[k])  # max keeps the first of equals
+    if distinct[key] < 2:
+        return "", [math.nan] * len(runs)
+    return ("dt", [p["dt"] for p in params]) if key == "dt" else (f"1/{key}", [1.0 / p[key] for p in params])
 
 
 def _peak(x: np.ndarray) -> float:
@@ -127,12 +128,15 @@ def _richardson(case, solver, runs, reference) -> list[dict]:
     name, h = _h(runs)
     if len(set(h)) < 3 or not name:
         return []
+    # peaks over the window every run and the reference cover (a run may stop early)
+    end = min([r.history["t"].iloc[-1] for r in runs] + ([reference.t[-1]] if reference is not None else []))
     rows = []
     for probe in case.probe_names:
-        q = [_peak(r.history[probe].to_numpy()) for r in runs]
+        q = [_peak(r.history[probe].to_numpy()[r.history["t"].to_numpy() <= end]) for r in runs]
         fit = metrics.richardson(h, q)
         finest = q[int(np.argmin(h))]
-        ref_peak = _peak(reference.values[probe]) if reference is not None and probe in reference.values else math.nan
+        ref_peak = (_peak(reference.values[probe][reference.t <= end])
+                    if reference is not None and probe in reference.values else math.nan)
         rows.append({"case": case.name, "solver": solver, "probe": probe, "quantity": "peak value", "h": name,
                      "finest": finest, "order": fit.order if fit else math.nan,
                      "extrapolated": fit.q_star if fit else math.nan,

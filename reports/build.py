@@ -75,7 +75,7 @@ def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = No
     if document:
         ctx = ReportContext(analyses, tables, figs, study, settings, out)
         subtitle = (f"{settings} settings; cases: {', '.join(an.case.name for an in analyses)}; "
-                    f"built by `smfem report`")
+                    "built by: smfem report")
         html = render_html(build_sections(ctx), TITLE, subtitle)
         (out / "index.html").write_text(html, encoding="utf-8")
         write_pdf(html, out / "report.pdf", out)

@@ -61,7 +61,7 @@ class Run:
     @property
     def label(self) -> str:
         """``r2 H40`` (refine, SMFEM harmonics), with ``dt`` when it is not the case's default."""
-        p = self.summary["params"] if self.summary else dict(self.job.overrides)
+        p = self.summary["params"] if self.summary else self.job.build().params
         default_dt = get_case(self.job.case).params["dt"]
         text = f"r{p.get('refine', 1)}" + (f" H{p.get('harmonics')}" if self.job.solver == SMFEM else "")
         return text + (f" dt{p['dt']:g}" if p.get("dt", default_dt) != default_dt else "")

@@ -137,15 +137,13 @@ def time_to_tolerance(cpu, err, tol: float = TOLERANCE) -> Cost:
 
 
 def speedup(reference: Cost, smfem: Cost) -> str:
-    """``reference / smfem`` CPU time to the tolerance, as an exact value or a bound."""
-    lo = reference.lo / smfem.hi if smfem.hi > 0 else math.inf
-    hi = reference.hi / smfem.lo if smfem.lo > 0 else math.inf
+    """``reference / smfem`` CPU time to the tolerance, as a value or a bound (``> x``, ``< x``)."""
     if not math.isfinite(smfem.best) or not math.isfinite(reference.best):
         return "n/a"
+    if reference.how == smfem.how != "interpolated":
+        return "neither reaches it" if smfem.how == "not reached" else "both at the coarsest level"
+    lo = reference.lo / smfem.hi if smfem.hi > 0 else math.inf
+    hi = reference.hi / smfem.lo if smfem.lo > 0 else math.inf
     if lo == hi:
         return f"{lo:.3g}x"
-    if math.isinf(hi) and lo > 0:
-        return f"> {lo:.3g}x"
-    if lo == 0 and math.isfinite(hi):
-        return f"< {hi:.3g}x"
-    return "unknown (both bounds open)"
+    return f"> {lo:.3g}x" if math.isinf(hi) else f"< {hi:.3g}x"

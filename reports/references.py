@@ -75,6 +75,8 @@ def best_history(case, reference_run) -> HistoryReference | None:
         return None
     h = reference_run.history
     name = f"{reference_run.job.solver} {reference_run.label} (finest reference FEM)"
+    if reference_run.status != "ok":  # a run that stopped early still compares over its window
+        name += f", {reference_run.status} after t = {h['t'].iloc[-1]:.3g} s"
     return HistoryReference(REFERENCE_FEM, name, h["t"].to_numpy(), {c: h[c].to_numpy() for c in h.columns[1:]})
 
 

@@ -79,7 +79,7 @@ def overview(ctx: ReportContext) -> list[Section]:
         p("How accurate and how fast SMFEM (the semi-analytic FEM: a finite-element cross-section with "
           "Fourier series along the third coordinate) is against the independent scikit-fem reference "
           "solver, in 2D (plane strain or axisymmetric) and in full 3D, on every verification case. "
-          "Every run is an `smfem run` with the parameters shown; the time step is the case's in every "
+          "Every run is what 'smfem run' does with the parameters shown; the time step is the case's in every "
           "run, so the errors measure the spatial discretization (CASES.md)."),
         items([
             f"settings: {ctx.settings}; {len(s.executed)} runs executed, {s.cached} taken from the cache; "

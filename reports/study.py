@@ -40,19 +40,19 @@ class StudyResult:
 
 
 def _jobs(study: CaseStudy) -> tuple[dict, Job, Job]:
-    """Jobs of the series, of the reference run and of the SMFEM run that writes fields.vtu
-    (the series run with the same resolved parameters, when there is one)."""
+    """Jobs of the series, of the reference run and of the SMFEM run at the case's settings,
+    which writes fields.vtu (the series run with those parameters, when there is one)."""
     def params(level):
         return get_case(study.case, {**study.base, **level}).params
 
-    shown = params(study.fields_level)
+    shown = params({})
 
     def job(solver, level):
         return Job.make(study.case, solver, {**study.base, **level},
                         fields=solver == SMFEM and params(level) == shown)
 
     series = {s.solver: [job(s.solver, level) for level in s.levels] for s in study.series}
-    fields = next((j for j in series.get(SMFEM, ()) if j.fields), None) or job(SMFEM, study.fields_level)
+    fields = next((j for j in series.get(SMFEM, ()) if j.fields), None) or job(SMFEM, {})
     return series, job(*study.reference), fields
 
 
