@@ -7,7 +7,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import figures
+from . import figures, stability  # noqa: F401  (importing stability registers its section)
 from .analysis import CaseAnalysis, analyse
 from .cache import RunCache
 from .document import render_html, write_pdf

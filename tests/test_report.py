@@ -200,3 +200,28 @@ def test_rod_theory_histories():
     assert h["mid_szz"][np.searchsorted(t, 0.4 / c)] == 0.0
     assert h["mid_szz"][np.searchsorted(t, 1.0 / c)] == pytest.approx(theory["stress"])
     assert h["end_uz"][t < t1].max() == 0.0 and h["end_uz"][-1] == pytest.approx(5.0 * (t[-1] - t1))
+
+
+def test_stability_section_renders_the_cached_table(tmp_path):
+    from types import SimpleNamespace
+
+    from reports.cache import code_version
+    from reports.sections import EXTRA_SECTIONS
+    from reports.stability import stability
+
+    runs = tmp_path / "runs"
+    runs.mkdir()
+    (tmp_path / "tables").mkdir()
+    rows = pd.DataFrame([
+        {"check": "unconditional stability", "setting": "thick_cylinder, dt = 10 dt_cr", "figure": "energy drift",
+         "value": 1e-13, "limit": 1e-10, "passed": True},
+        {"check": "thin dome", "setting": "R/h = 1000, SMFEM 4 x 20", "figure": "apex deflection",
+         "value": 0.126, "limit": 0.02, "passed": False},
+    ])
+    rows.to_csv(runs / f"stability-{code_version('smfem')}-{code_version('reference')}.csv", index=False)
+    ctx = SimpleNamespace(settings="quick", out=tmp_path)
+    (section,) = stability(ctx)
+    assert section.id == "stability" and "1 of 2 figures within their limits" in section.blocks[2]["text"]
+    assert (tmp_path / "tables" / "stability.csv").exists()
+    assert stability(SimpleNamespace(settings="tiny", out=tmp_path)) == []
+    assert stability in EXTRA_SECTIONS  # the report renders it after the cases
