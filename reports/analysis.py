@@ -81,7 +81,8 @@ def _run_rows(cr: CaseRuns, case, reference, points) -> list[dict]:
             for probe in case.probe_names:
                 a = run.history[probe].to_numpy()
                 if reference is not None and probe in reference.values:
-                    e_max, e_l2 = metrics.history_errors(t, a, reference.t, reference.values[probe])
+                    e_max, e_l2 = metrics.history_errors(t, a, reference.t, reference.values[probe],
+                                                         case.references.get("comparison_window_s", 0.0))
                     rows.append({**base, "probe": probe, "reference": reference.name, "err_max": e_max,
                                  "err_l2": e_l2, "headline": probe in headline})
                 for pp in (p for p in points if p.probe == probe):

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from cases import get_case
+from reports.metrics import moving_average
 from smfem.contact import NORMAL, SHEAR, SLIP_NEG, SLIP_POS, STICK, ContactLayer
 from smfem.contact_run import solve_contact
 from smfem.model import Model
@@ -134,9 +135,7 @@ def transit_filtered(x: np.ndarray, case) -> np.ndarray:
     by 29 % (reference, refine 1 to 2) and 38 % (SMFEM, refine 1 to 4) in L2 between meshes, so
     no two models agree on it; what both resolve is the history seen through this window.
     """
-    w = int(round(2 * 0.05 / np.sqrt(case.material.E / case.material.rho) / case.dt))
-    padded = np.concatenate([np.full(w, x[0]), x, np.full(w, x[-1])])
-    return np.convolve(padded, np.ones(w) / w, mode="same")[w:-w]
+    return moving_average(x, int(round(case.references["comparison_window_s"] / case.dt)))
 
 
 def test_nu03_displacement_and_velocity_histories_agree_with_the_reference():
