@@ -13,6 +13,7 @@ import numpy as np
 
 from .contact import ContactError, ContactLayer, ContactNewmark
 from .fields import field_mesh
+from .model import ModelError
 from .probes import ProbeSet
 from .result import RunResult
 
@@ -40,6 +41,9 @@ def solve_contact(case, model, progress=None, with_fields=False, cpu0=None, mass
     axial = np.zeros_like(m_full)
     axial[1::3] = m_full[1::3]  # x2 = z is the axis of the rod
     velocity_row = (T.T @ axial) / axial.sum()
+    for q in case.probes:
+        if q.kind != "point" and (q.kind, q.field) not in (("edge_mean", "sigma"), ("body_mean", "v")):
+            raise ModelError(f"{case.name}: probe {q.name!r} ({q.kind} of {q.field}) is not available with contact")
     names = list(case.probe_names)
     n = case.n_steps
     values = np.full((n + 1, len(names)), np.nan)
