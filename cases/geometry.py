@@ -126,11 +126,24 @@ class InitialVelocity:
 
 @dataclass(frozen=True)
 class Wall:
-    """Rigid wall facing the section edge ``edge`` across an initial ``gap``, with friction."""
+    """Rigid wall facing the section edge ``edge`` across an initial ``gap``, with friction.
+
+    ``slope`` tilts the wall about an axis normal to the plane (x, x2) of the section at
+    x3 = 0: the gap at a face point grows as ``gap + slope (x_max - x)``, where ``x`` is the
+    point's first Cartesian coordinate (ring: ``r cos x3``) and ``x_max`` its largest value on
+    the face, so the wall is first touched at x3 = 0, on the face's outer edge. The wall's
+    normal is kept along the face normal (small-slope model: the normal force is right to
+    O(slope^2); its tangential component, O(slope) of it, is left out in both solvers).
+    """
 
     edge: str
     gap: float
     friction: float
+    slope: float = 0.0
+
+    def gap_at(self, x, x_max: float):
+        """Initial gap at face points of first Cartesian coordinate ``x``."""
+        return self.gap + self.slope * (x_max - x)
 
 
 @dataclass(frozen=True)

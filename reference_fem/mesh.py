@@ -133,7 +133,8 @@ def build_mesh(case) -> RefMesh:
         counts = {"s": len(s_nodes) - 1, "t": len(t_nodes) - 1}
     elif rep == PLANE_STRAIN:
         blocks, counts = _plane_blocks(case, s_nodes, t_nodes, x3_nodes)
-    elif case.body == RING and case.axisymmetric and _axis_direction(sec) is not None:
+    elif case.body == RING and _axis_direction(sec) is not None and (case.axisymmetric or not (case.cutouts or case.loads)):
+        # the O-grid has no node lines at given angles: fine where no cut-out or load patch needs them
         blocks, counts = _ogrid_blocks(sec, s_nodes, t_nodes)
     elif case.body == RING:
         def ring(p):
@@ -205,9 +206,8 @@ def _plane_blocks(case, s_nodes, t_nodes, x3_nodes):
     sec = case.section
     dropped = sec.t if case.body == RING else sec.s
     if sec.kind != "rect" or dropped.refinable:
-        raise ValueError(
-            f"reference solver: case {case.name!r} has no plane-strain 2D form; use dim=3"
-        )
+        why = " (a tilted wall is not axisymmetric)" if case.wall is not None and case.wall.slope else ""
+        raise UnsupportedCase(f"reference solver: case {case.name!r} has no plane-strain 2D form{why}; use dim=3")
     if case.body == RING:
         def annulus(p):
             x1 = sec.to_x(p[0], 0.0)[0]

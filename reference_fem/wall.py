@@ -9,6 +9,7 @@ from cases.params import UnsupportedCase
 from .contact import WallContact, WallRows, wall_rows
 from .equilibrium import Elastic
 from .face import plane_face
+from .frames import AXISYMMETRIC
 
 #: penetration tolerance relative to the largest mesh coordinate (round-off level)
 PENETRATION_TOL = 1e-12
@@ -48,9 +49,19 @@ def case_wall_rows(model) -> WallRows:
     wall = model.case.wall
     if model.case.material.plastic:
         raise UnsupportedCase("reference solver: contact with plasticity is not available")
+    if wall.slope and model.rep == AXISYMMETRIC:
+        raise UnsupportedCase("reference solver: a tilted wall (wall_slope > 0) is not axisymmetric: use dim=3")
     face = plane_face(model, wall.edge)
-    return wall_rows(face.nodes, face.normal, np.full(face.nodes.size, wall.gap), model.free,
+    return wall_rows(face.nodes, face.normal, initial_gaps(model, face.nodes), model.free,
                      model.basis.N, wall.friction, PENETRATION_TOL * np.abs(model.rmesh.mesh.p).max())
+
+
+def initial_gaps(model, nodes: np.ndarray) -> np.ndarray:
+    """The wall's initial gap at mesh ``nodes`` (a tilted wall's grows away from its first-struck
+    rim point: :class:`cases.geometry.Wall`); the face's nodes give the rim's position."""
+    wall = model.case.wall
+    x = model.rmesh.mesh.doflocs[0]  # first Cartesian coordinate (3D) or radius (axisymmetric)
+    return wall.gap_at(x[nodes], x[plane_face(model, wall.edge).nodes].max())
 
 
 class ContactLog:
@@ -63,7 +74,8 @@ class ContactLog:
     def __init__(self, system: WallSystem, per_radian: bool):
         self.system = system
         model = system.model
-        self.face, self.gap = plane_face(model, model.case.wall.edge), model.case.wall.gap
+        self.face = plane_face(model, model.case.wall.edge)
+        self.gap = initial_gaps(model, np.arange(model.rmesh.mesh.doflocs.shape[1]))  # at every node
         self.factor = 2 * np.pi if per_radian else 1.0
         self.energy = []
         self.contact_times = []
@@ -82,7 +94,7 @@ class ContactLog:
         """Smallest distance of any mesh node to the wall (m), negative when it penetrates."""
         model = self.system.model
         x = model.rmesh.mesh.doflocs + model.nodal_displacement(u_full)
-        return float(self.face.offset + self.gap - (self.face.normal @ x).max())
+        return float((self.face.offset + self.gap - self.face.normal @ x).min())
 
     def info(self) -> dict:
         window = [self.contact_times[0], self.contact_times[-1]] if self.contact_times else None

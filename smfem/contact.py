@@ -2,40 +2,90 @@
 
 One layer element sits on every segment of the face ``case.wall.edge``; its far face is the
 wall (fixed). The layer is built with the same moment-scheme formulas as any element; only its
-elasticity ``D`` depends on the element's state, re-evaluated inside the iterations of a step:
+elasticity ``D`` depends on the state, held at each of the layer's points (two Gauss points
+along the face per layer element, times the points along x3, the circumference) and
+re-evaluated inside the iterations of a step:
 
 * open (the layer would carry normal tension): ``D = 0``;
 * stick: normal stiffness ``E_l`` and tangential stiffness ``G_l = E_l / 2``;
-* slip: the tangential row is condensed onto the normal one, ``tau = -f sigma_n * sign``, so
-  the tangential stress follows Coulomb's law (18)-(19); with ``f = 0`` a closed element always
-  slips.
+* slip: the tangential rows are condensed onto the normal one, ``tau = -f sigma_n d`` with the
+  slip direction ``d`` (a unit vector of the two tangential shears: in the section plane and
+  along x3), so the tangential stress follows Coulomb's law (18)-(19); with ``f = 0`` a closed
+  point always slips. The matrix of a slipping point is the law's consistent tangent (the
+  direction turns with the tangential strain, as in a return mapping), so the iterations are
+  Newton's; where they still cycle they are damped (:meth:`ContactNewmark.step`).
 
-Only the traction rows of the layer (normal strain, in-plane shear) carry stress: the layer's
-own membrane stiffness would otherwise add a spurious tangential restraint.
+Two points per layer element, not one at its centre: with the moment scheme's gradient terms
+in the stiffness and the state taken at the centre, closing an element could pull its centre
+open (the switch is not monotone), and a point at the edge of the contact zone flipped between
+open and closed for ever (seen on the tilted wall). At the Gauss points the layer's energy is a
+sum of point terms, convex without friction.
 
-The initial gap ``g`` enters as a normal pre-strain ``g / h``: the layer closes when the face
-has moved ``g`` towards the wall. A layer compressed beyond its thickness (the face went
-through the wall) and states that cycle without settling are errors, never silent.
+Only the traction rows of the layer (normal strain, the two tangential shears) carry stress:
+the layer's own membrane stiffness would otherwise add a spurious tangential restraint.
 
-The layer is axisymmetric (harmonic 0, cosine family: radial and axial motion), as the paper's
-rod impact; other scenes raise :class:`~smfem.model.ModelError`.
+The initial gap ``g`` enters as a normal pre-strain ``g / h``: the layer closes where the face
+has moved ``g`` towards the wall; a tilted wall (``case.wall.slope``) gives each point its own
+gap. A layer compressed beyond its thickness (the face went through the wall) and states that
+cycle without settling are errors, never silent.
+
+Harmonics: the layer's strain at a point is the sum over all modes; its stiffness couples the
+modes through the state pattern along x3 (quadrature over equally spaced points, exact for the
+products of the harmonics kept where the state does not change). An axisymmetric run (harmonic
+0 only, uniform gap) has one point. Bodies of revolution only; the body itself must not couple
+the modes (no cut-outs), so that each mode keeps its own factorization.
 """
 
 from __future__ import annotations
+
+import math
+from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
+from cases.geometry import RING
 from cases.timeint import newmark_constants
 
-from . import assembly, element, fourier
+from . import element, fourier
 from .model import ModelError
+from .sampling import GAUSS_A
 
-OPEN, STICK, SLIP_POS, SLIP_NEG = 0, 1, 2, 3
-NORMAL, SHEAR = 1, 3  # strain rows e22 (normal to the layer) and g12 (in-plane tangential)
+OPEN, STICK, SLIP = 0, 1, 2
+NORMAL = 1  # strain row e22: normal to the layer
+SHEAR = [3, 5]  # g12 (tangential in the section plane) and g23 (tangential along x3)
+TRACTION = [NORMAL] + SHEAR  # the only rows that carry stress in the layer
 #: iterations over the layer states allowed in one step
-MAX_STATE_ITERATIONS = 30
+MAX_STATE_ITERATIONS = 60
+#: the smallest share of a step towards the next iterate before a cycle counts as chattering
+MIN_RELAXATION = 1.0 / 16
+#: a slip direction that moves less than this between iterations has settled
+DIRECTION_TOL = 1e-6
+#: layer points along the circumference per harmonic kept (products up to 2 l_max are exact)
+POINTS_PER_HARMONIC = 4
+#: layer matrices kept per run, keyed by state (a few patterns recur)
+CACHE_SIZE = 64
+
+
+class LayerStates(NamedTuple):
+    """State of every layer point, ``(n_points, n_x3)`` arrays.
+
+    ``kind``: OPEN, STICK or SLIP; ``direction`` (.., 2): unit slip direction in the two
+    tangential shears (zero unless slipping); ``kappa``: ``f |sigma_n| / |tau_trial|`` of a
+    slipping point, the weight of the slip direction's change in the consistent tangent.
+    """
+
+    kind: np.ndarray
+    direction: np.ndarray
+    kappa: np.ndarray
+
+    def close_to(self, other: "LayerStates", tol: float = DIRECTION_TOL) -> bool:
+        """Same kinds and slip directions within ``tol``: an iteration has come back here."""
+        return np.array_equal(self.kind, other.kind) and np.abs(self.direction - other.direction).max(initial=0.0) < tol
+
+    def key(self) -> bytes:
+        return self.kind.tobytes() + self.direction.tobytes() + self.kappa.tobytes()
 
 
 class ContactError(RuntimeError):
@@ -43,25 +93,31 @@ class ContactError(RuntimeError):
 
 
 class ContactLayer:
-    """Layer elements on ``case.wall.edge`` of a harmonic-0 model.
+    """Layer elements on ``case.wall.edge`` of a ring model, a state at each of their points.
 
     Parameters
     ----------
-    model : :class:`smfem.model.Model` of an axisymmetric ring (mode 0, cosine family only)
+    model : :class:`smfem.model.Model` of a body of revolution without cut-outs
     thickness : layer thickness h (length units of the case)
     stiffness : layer Young's modulus E_l
+
+    Point arrays are shaped ``(n_points, n_x3, ...)``, two points (the Gauss points along the
+    face) per layer element; face displacements ``(n_modes, n_F)`` over the full dofs ``F`` of
+    the face nodes.
     """
 
     def __init__(self, model, thickness: float, stiffness: float):
         case = model.case
-        if [str(m) for m in model.modes] != [str(fourier.Mode(0, "c"))] or len(model.systems) != 1:
-            raise ModelError(f"{case.name}: the contact layer is implemented for axisymmetric scenes "
-                             f"(harmonic 0, radial and axial motion) only")
-        self.model, self.h, self.E = model, float(thickness), float(stiffness)
-        self.gap, self.f = float(case.wall.gap), float(case.wall.friction)
+        if case.body != RING:
+            raise ModelError(f"{case.name}: the contact layer is implemented for bodies of revolution only")
+        if model.coupling:
+            raise ModelError(f"{case.name}: contact with material varying along x3 (cut-outs) is not supported")
+        self.model, self.h, self.E, self.G = model, float(thickness), float(stiffness), 0.5 * float(stiffness)
+        wall = case.wall
+        self.f = float(wall.friction)
         mesh = model.mesh
-        face = mesh.edge_nodes(case.wall.edge)
-        seg, owner = mesh.edge_segments(case.wall.edge)
+        face = mesh.edge_nodes(wall.edge)
+        seg, owner = mesh.edge_segments(wall.edge)
         x = mesh.x
         tangent = x[seg[:, 1]] - x[seg[:, 0]]
         normal = np.column_stack([tangent[:, 1], -tangent[:, 0]])
@@ -71,99 +127,160 @@ class ContactLayer:
         out_node = np.zeros((len(face), 2))
         np.add.at(out_node, seg, normal[:, None, :])
         out_node /= np.linalg.norm(out_node, axis=1, keepdims=True)
-        wall = x[face] + self.h * out_node
+        wall_x = x[face] + self.h * out_node
         where = {n: k for k, n in enumerate(face)}
         a, b = np.array([where[n] for n in seg[:, 0]]), np.array([where[n] for n in seg[:, 1]])
-        X = np.stack([wall[a], wall[b], x[seg[:, 1]], x[seg[:, 0]]], axis=1)  # xi along the face
+        X = np.stack([wall_x[a], wall_x[b], x[seg[:, 1]], x[seg[:, 0]]], axis=1)  # xi along the face
         self.ops = element.operators(X, case.body, 0.0)
-        self.face_nodes = seg[:, ::-1]  # local nodes 2, 3 of each layer element
-        self.dofs = (3 * self.face_nodes[:, :, None] + np.arange(3)).reshape(len(seg), 6)
-        self.area = self.ops.sqrt_g.copy()  # per radian of circumference, as the model's integrals
-        mode = model.modes[0]
-        i1, i3 = fourier.psi_squared_integrals(mode, model.body, model.length)
-        self.integrals = np.zeros((len(seg), 2, 2))
-        self.integrals[:, 0, 0], self.integrals[:, 1, 1] = i1, i3
-        self.T = model.systems[0].T
-        B0 = self.ops.at(0.0)[0]
-        self.B_face = B0[:, :, 6:]  # centre strain from the face nodes (the wall does not move)
-        self.slip_strain = np.zeros(len(seg))  # committed tangential slip (strain) per element
-        n = len(seg)
-        self.state = np.full(n, OPEN)
+        # the layer's points in its section: the 2 Gauss points along the face of each element
+        # (the layer's stresses vary only along the face; a^2 = 1/12 makes their mean of
+        # B' D B the moment scheme's stiffness), so each point's law is its own and the
+        # layer's energy a sum of point terms (convex without friction)
+        n_e = self.n_elements = len(seg)
+        self.element = np.repeat(np.arange(n_e), 2)
+        xi = np.tile([-GAUSS_A, GAUSS_A], n_e)
+        dofs = (3 * seg[:, ::-1, None] + np.arange(3)).reshape(n_e, 6)[self.element]  # local nodes 2, 3
+        self.F = np.unique(dofs)
+        self.local = np.searchsorted(self.F, dofs)  # (n_points, 6) positions in F
+        self.C = [s.T[self.F].tocsr() for s in model.systems]  # face dofs <- reduced, per mode
+        self.offsets = np.cumsum([0] + [s.T.shape[1] for s in model.systems])
+        # points along x3 and the basis of every mode and strain row there
+        l_max = max(m.l for m in model.modes)
+        if l_max == 0 and wall.slope:
+            raise ModelError(f"{case.name}: a tilted wall (wall_slope > 0) makes the contact vary around "
+                             f"the circumference: set harmonics >= 2")
+        n_x3 = 1 if l_max == 0 else POINTS_PER_HARMONIC * (l_max + 1)
+        self.x3 = 2 * math.pi * np.arange(n_x3) / n_x3
+        self.w = np.full(n_x3, 2 * math.pi / n_x3)
+        self.psi = np.stack([np.where(fourier.ROW_TYPE == 0, *(v[:, None] for v in fourier.psi(m, self.x3, RING, 0.0)))
+                             for m in model.modes])  # (n_modes, n_x3, 6)
+        B = [self.ops.at(float(m.l)) for m in model.modes]
+        self.B = np.stack([(B0[self.element] + xi[:, None, None] * B1[self.element])[..., 6:] for B0, B1, _ in B])
+        r = 0.5 * (x[seg[:, 0], 0] + x[seg[:, 1], 0])[self.element] + xi * (x[seg[:, 1], 0] - x[seg[:, 0], 0])[self.element]
+        self.gap = wall.gap_at(r[:, None] * np.cos(self.x3)[None, :], x[face, 0].max())  # (n_points, n_x3)
+        self.area = 0.5 * self.ops.sqrt_g[self.element, None] * self.w[None, :]  # quadrature weight of every point
+        shape = (len(self.element), n_x3)
+        self.slip_strain = np.zeros(shape + (2,))  # committed tangential slip per point
+        self.states = LayerStates(np.full(shape, OPEN), np.zeros(shape + (2,)), np.zeros(shape))
+        # global rows/cols of every entry of the per-element face blocks, all mode pairs
+        n_modes, nF = len(model.modes), len(self.F)
+        R = np.arange(n_modes)[:, None, None] * nF + self.local[None]  # (modes, n_e, 6)
+        self._scatter = (R[:, None, :, :, None] * (n_modes * nF) + R[None, :, :, None, :]).ravel()
+        self.size = n_modes * nF
+
+    # -- kinematics ---------------------------------------------------------------------------
+    def face_values(self, u: np.ndarray) -> np.ndarray:
+        """(n_modes, n_F) face displacements of the stacked reduced amplitudes ``u``."""
+        return np.stack([C @ u[a:b] for C, a, b in zip(self.C, self.offsets[:-1], self.offsets[1:])])
+
+    def strain(self, u: np.ndarray) -> np.ndarray:
+        """(n_points, n_x3, 6) layer strain at the layer's points."""
+        amp = np.einsum("ierk,iek->ier", self.B, self.face_values(u)[:, self.local])
+        return np.einsum("iqr,ier->eqr", self.psi, amp)
 
     # -- constitutive state -------------------------------------------------------------------
-    def centre_strain(self, u_full: np.ndarray) -> np.ndarray:
-        """(n, 6) layer strain at the element centres of a full displacement vector."""
-        return np.einsum("erk,ek->er", self.B_face, u_full[self.dofs])
-
-    def states_of(self, strain: np.ndarray) -> np.ndarray:
-        """State of every layer element for a strain (the committed slip taken into account)."""
-        closure = strain[:, NORMAL] + self.gap / self.h
+    def states_of(self, strain: np.ndarray) -> LayerStates:
+        """State of every point for a strain (the committed slip taken into account)."""
+        closure = strain[..., NORMAL] + self.gap / self.h
         sigma_n = self.E * closure
-        tau = 0.5 * self.E * (strain[:, SHEAR] - self.slip_strain)
-        state = np.where(tau >= 0, SLIP_POS, SLIP_NEG)
-        state = np.where((self.f > 0) & (np.abs(tau) <= self.f * np.abs(sigma_n)), STICK, state)
-        return np.where(closure >= 0, OPEN, state)
+        tau = self.G * (strain[..., SHEAR] - self.slip_strain)  # trial: no further slip
+        size = np.linalg.norm(tau, axis=-1)
+        limit = self.f * np.abs(sigma_n)
+        kind = np.where((self.f > 0) & (size <= limit), STICK, SLIP)
+        kind = np.where(closure >= 0, OPEN, kind)
+        slipping = (kind == SLIP) & (size > 0) & (self.f > 0)  # without friction no direction
+        safe = np.where(slipping, size, 1.0)
+        direction = np.where(slipping[..., None], tau / safe[..., None], 0.0)
+        kappa = np.where(slipping, limit / safe, 0.0)
+        return LayerStates(kind, direction, kappa)
 
-    def D(self, state: np.ndarray) -> np.ndarray:
-        """(n, 6, 6) layer elasticity of each element's state."""
-        D = np.zeros((len(state), 6, 6))
-        closed = state != OPEN
-        D[closed, NORMAL, NORMAL] = self.E
-        D[state == STICK, SHEAR, SHEAR] = 0.5 * self.E
-        sign = np.where(state == SLIP_POS, 1.0, np.where(state == SLIP_NEG, -1.0, 0.0))
-        D[:, SHEAR, NORMAL] = -self.f * self.E * sign  # tau = -f sigma_n sign: (18)-(19)
+    def D(self, states: LayerStates) -> np.ndarray:
+        """(n_points, n_x3, 6, 6) layer elasticity (the consistent tangent) of each state.
+
+        Slip: ``tau = -f sigma_n d`` with ``d`` the direction of the trial stress (18)-(19),
+        linearized about the current iterate: ``dtau/de_n = -f E d`` and
+        ``dtau/dgamma = kappa G (I - d d')`` (the direction turns with the tangential strain;
+        frozen, it flips between iterations where the slip turns).
+        """
+        kind, d = states.kind, states.direction
+        D = np.zeros(kind.shape + (6, 6))
+        D[..., NORMAL, NORMAL] = np.where(kind != OPEN, self.E, 0.0)
+        slip = kind == SLIP
+        for k, row in enumerate(SHEAR):
+            D[..., row, NORMAL] = np.where(slip, -self.f * self.E * d[..., k], 0.0)
+            for m, col in enumerate(SHEAR):
+                turn = states.kappa * self.G * ((k == m) - d[..., k] * d[..., m])
+                D[..., row, col] = np.where(kind == STICK, self.G * (k == m), np.where(slip, turn, 0.0))
         return D
 
-    def offset_strain(self, state: np.ndarray) -> np.ndarray:
-        """(n, 6) strain the layer adds to the displacement's: the gap and the committed slip."""
-        e = np.zeros((len(state), 6))
-        e[:, NORMAL] = self.gap / self.h
-        e[:, SHEAR] = np.where(state == STICK, -self.slip_strain, 0.0)
+    def offset_strain(self, states: LayerStates) -> np.ndarray:
+        """(n_points, n_x3, 6) strain the layer adds to the displacement's: the gap and the
+        committed slip."""
+        e = np.zeros(states.kind.shape + (6,))
+        e[..., NORMAL] = self.gap / self.h
+        e[..., SHEAR] = np.where((states.kind != OPEN)[..., None], -self.slip_strain, 0.0)
         return e
 
-    def stress(self, strain: np.ndarray, state: np.ndarray) -> np.ndarray:
-        return np.einsum("ers,es->er", self.D(state), strain + self.offset_strain(state))
+    def stress(self, strain: np.ndarray, states: LayerStates) -> np.ndarray:
+        return np.einsum("eqrs,eqs->eqr", self.D(states), strain + self.offset_strain(states))
 
-    # -- matrices and forces (reduced dofs of mode 0) -----------------------------------------
-    def stiffness(self, state: np.ndarray) -> sp.csr_matrix:
-        blocks = element.element_stiffness(self.ops, 0.0, assembly.weighted_elasticity(self.D(state), self.integrals))
-        n_full = 3 * self.model.mesh.n_nodes
-        face = blocks[:, 6:, 6:]
-        rows = np.repeat(self.dofs, 6, axis=1).ravel()
-        cols = np.tile(self.dofs, (1, 6)).ravel()
-        K = sp.csr_matrix((face.ravel(), (rows, cols)), shape=(n_full, n_full))
-        return (self.T.T @ K @ self.T).tocsr()
+    # -- matrices and forces ------------------------------------------------------------------
+    def face_matrix(self, states: LayerStates) -> np.ndarray:
+        """Dense layer stiffness on the face dofs of all modes, ``(n_modes n_F)`` square."""
+        D = self.D(states)[..., TRACTION, :][..., TRACTION] * self.area[..., None, None]
+        psi, n_modes = self.psi[..., TRACTION], len(self.C)
+        Dw = np.zeros((n_modes, n_modes, len(self.element), 3, 3))
+        for r in range(3):
+            for s in range(3):
+                if D[..., r, s].any():  # x3 quadrature as one matrix product per row pair
+                    Dw[:, :, :, r, s] = ((psi[:, None, :, r] * D[None, :, :, r, s]) @ psi[:, :, s].T).transpose(0, 2, 1)
+        B = self.B[:, :, TRACTION]
+        k = np.einsum("ierk,ijers,jesl->ijekl", B, Dw, B, optimize=True)
+        return np.bincount(self._scatter, k.ravel(), minlength=self.size**2).reshape(self.size, self.size)
 
-    def offset_force(self, state: np.ndarray) -> np.ndarray:
-        """Reduced nodal forces of the offset strain, ``int B' D e_off``."""
-        Dw = assembly.weighted_elasticity(self.D(state), self.integrals)
-        per = np.einsum("erk,ers,es,e->ek", self.B_face, Dw, self.offset_strain(state), self.ops.sqrt_g)
-        full = np.bincount(self.dofs.ravel(), per.ravel(), minlength=3 * self.model.mesh.n_nodes)
-        return self.T.T @ full
+    def offset_force(self, states: LayerStates) -> np.ndarray:
+        """Stacked reduced nodal forces of the offset strain, ``int B' D e_off``."""
+        sigma = self.stress(np.zeros(states.kind.shape + (6,)), states)[..., TRACTION] * self.area[..., None]
+        projected = np.einsum("iqr,eqr->ier", self.psi[..., TRACTION], sigma)
+        per = np.einsum("ierk,ier->iek", self.B[:, :, TRACTION], projected)
+        n_modes, nF = len(self.C), len(self.F)
+        face = np.bincount((np.arange(n_modes)[:, None, None] * nF + self.local[None]).ravel(), per.ravel(),
+                           minlength=n_modes * nF).reshape(n_modes, nF)
+        return np.concatenate([C.T @ fi for C, fi in zip(self.C, face)])
 
-    def commit(self, strain: np.ndarray, state: np.ndarray) -> None:
-        """End of a converged step: slipping elements carry their slip; the states become the
-        next step's first guess."""
-        sigma = self.stress(strain, state)
-        slipping = (state == SLIP_POS) | (state == SLIP_NEG)
-        self.slip_strain = np.where(slipping, strain[:, SHEAR] - sigma[:, SHEAR] / (0.5 * self.E), self.slip_strain)
-        self.slip_strain = np.where(state == OPEN, strain[:, SHEAR], self.slip_strain)
-        self.state = state
+    def commit(self, strain: np.ndarray, states: LayerStates) -> None:
+        """End of a converged step: slipping points carry their slip; open points release it;
+        the states become the next step's first guess."""
+        sigma = self.stress(strain, states)
+        slipping = (states.kind == SLIP)[..., None]
+        self.slip_strain = np.where(slipping, strain[..., SHEAR] - sigma[..., SHEAR] / self.G, self.slip_strain)
+        self.slip_strain = np.where((states.kind == OPEN)[..., None], strain[..., SHEAR], self.slip_strain)
+        self.states = states
 
-    def mean_normal_stress(self, strain: np.ndarray, state: np.ndarray) -> float:
+    # -- what a run reports ---------------------------------------------------------------------
+    def mean_normal_stress(self, strain: np.ndarray, states: LayerStates) -> float:
         """Mean normal stress on the face (compressive negative): the contact pressure."""
-        return float(self.area @ self.stress(strain, state)[:, NORMAL] / self.area.sum())
+        return float(np.sum(self.area * self.stress(strain, states)[..., NORMAL]) / self.area.sum())
+
+    def energy(self, strain: np.ndarray, states: LayerStates) -> float:
+        """Strain energy stored in the layer (the model's integrals along x3)."""
+        sigma = self.stress(strain, states)
+        return float(0.5 * np.einsum("eqr,eqr,eq->", sigma, strain + self.offset_strain(states), self.area))
+
+    def closed_fraction(self, states: LayerStates) -> float:
+        """Share of the face area in contact (stick or slip)."""
+        return float(self.area[states.kind != OPEN].sum() / self.area.sum())
 
 
-def face_free_mass(model, edge: str) -> np.ndarray:
-    """Lumped mass (3 n_nodes,) with the face nodes' mass moved to the next row inside.
+def face_free_mass(model, edge: str, i: int = 0) -> np.ndarray:
+    """Lumped mass (3 n_nodes,) of mode ``i`` with the face nodes' mass moved to the next row in.
 
     A massive face node on the stiff layer is an oscillator far above what dt resolves:
     Newmark leaves it undamped and the contact pressure rings at the Nyquist frequency. With
     massless contact nodes (mass redistribution, Khenous, Laborde & Renard 2008) the face
     follows quasi-statically; the total mass is kept.
     """
-    m = model.full_mass(0, 0).reshape(-1, 3).copy()
+    m = model.full_mass(i, i).reshape(-1, 3).copy()
     ns, nt = model.mesh.shape
     grid = np.arange(model.mesh.n_nodes).reshape(nt + 1, ns + 1)
     face, inside = {"s_min": (grid[:, 0], grid[:, 1]), "s_max": (grid[:, -1], grid[:, -2]),
@@ -174,77 +291,101 @@ def face_free_mass(model, edge: str) -> np.ndarray:
 
 
 class ContactNewmark:
-    """Average-acceleration Newmark of a harmonic-0 model with a contact layer.
+    """Average-acceleration Newmark of a ring model with a contact layer.
 
     Each step iterates: solve with the layer matrix of the current states, re-evaluate the
-    states from the new displacements, until no state changes. ``K + a0 M`` is factorized once:
-    the layer touches only the face dofs, so ``(K + a0 M + P' k P) x = b`` is solved as
-    ``x = y - Z c`` with ``y = A0^-1 b``, ``Z = A0^-1 P'`` (computed once) and the small dense
-    system ``(I + k S) c = k P y``, ``S = P Z`` (Woodbury, with ``k`` the layer's face block).
+    states from the new displacements, until no state (and no slip direction) changes. Each
+    mode's ``K + a0 M`` is factorized once: the layer touches only the face dofs ``F``, so
+    ``(A0 + C' k C) x = b`` (``A0`` block-diagonal over the modes, ``C`` the face rows, ``k``
+    the layer's dense face matrix, which couples the modes) is solved as ``x = y - Z c`` with
+    ``y = A0^-1 b``, ``Z = A0^-1 C'`` (per mode, once) and the small dense system
+    ``(I + k S) c = k C y``, ``S = C Z`` (Woodbury).
     """
 
     def __init__(self, model, layer: ContactLayer, dt: float, massless_face: bool = True):
-        s = model.systems[0]
-        self.K, self.Q, self.layer = s.K, s.Q, layer
+        systems = model.systems
+        self.layer, self.K = layer, [s.K for s in systems]
+        self.Q = np.concatenate([s.Q for s in systems])
+        edge = model.case.wall.edge
         # massless_face=False keeps the face nodes' mass: only to show what it does (tests)
-        self.m_full = face_free_mass(model, model.case.wall.edge) if massless_face else model.full_mass(0, 0)
-        self.M = s.T.multiply(s.T).T @ self.m_full
+        self.m_full = [face_free_mass(model, edge, i) if massless_face else model.full_mass(i, i)
+                       for i in range(len(systems))]
+        self.M = np.concatenate([s.T.multiply(s.T).T @ m for s, m in zip(systems, self.m_full)])
         self.c = newmark_constants(dt)
-        self.lu = sla.splu((self.K + sp.diags(self.c.a0 * self.M)).tocsc())
-        self.factorizations = 1
-        # the reduced dofs any layer state can touch, and the solution's response to them
-        every = np.full(len(layer.state), STICK)
-        self.face = np.unique(layer.stiffness(every).tocoo().row)
-        P = np.zeros((len(self.M), len(self.face)))
-        P[self.face, np.arange(len(self.face))] = 1.0
-        self.Z = self.lu.solve(P)
-        self.S = self.Z[self.face]
+        self.offsets = layer.offsets
+        self.lus = [sla.splu((K + sp.diags(self.c.a0 * self.M[a:b])).tocsc())
+                    for K, a, b in zip(self.K, self.offsets[:-1], self.offsets[1:])]
+        self.factorizations = len(self.lus)
+        self.Z = [lu.solve(C.T.toarray()) for lu, C in zip(self.lus, layer.C)]
+        nF = len(layer.F)
+        self.S = np.zeros((layer.size, layer.size))
+        for i, (C, Z) in enumerate(zip(layer.C, self.Z)):
+            self.S[i * nF:(i + 1) * nF, i * nF:(i + 1) * nF] = C @ Z
         self.face_blocks: dict[bytes, np.ndarray] = {}
         self.max_closure = 0.0  # largest layer compression over the run, in layer thicknesses
 
-    def _solve(self, state: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        y = self.lu.solve(rhs)
-        key = state.tobytes()
-        if key not in self.face_blocks:  # a few patterns recur over a run
-            self.face_blocks[key] = self.layer.stiffness(state)[self.face][:, self.face].toarray()
-        k = self.face_blocks[key]
-        if not k.any():
+    def _blocks(self, vector: np.ndarray):
+        return [vector[a:b] for a, b in zip(self.offsets[:-1], self.offsets[1:])]
+
+    def stiffness_product(self, u: np.ndarray) -> np.ndarray:
+        """``K u`` of the body (all modes stacked)."""
+        return np.concatenate([K @ ui for K, ui in zip(self.K, self._blocks(u))])
+
+    def _solve(self, states: LayerStates, rhs: np.ndarray) -> np.ndarray:
+        y = np.concatenate([lu.solve(r) for lu, r in zip(self.lus, self._blocks(rhs))])
+        if not (states.kind != OPEN).any():
             return y
-        c = np.linalg.solve(np.eye(len(k)) + k @ self.S, k @ y[self.face])
-        return y - self.Z @ c
+        key = states.key()
+        k = self.face_blocks.get(key)
+        if k is None:
+            if len(self.face_blocks) >= CACHE_SIZE:
+                self.face_blocks.clear()
+            k = self.face_blocks[key] = self.layer.face_matrix(states)
+        c = np.linalg.solve(np.eye(len(k)) + k @ self.S, k @ self.layer.face_values(y).ravel())
+        c = c.reshape(len(self.Z), -1)
+        return y - np.concatenate([Z @ ci for Z, ci in zip(self.Z, c)])
 
     def initial_acceleration(self, u: np.ndarray) -> np.ndarray:
         """``M a = Q - K u``; the massless face nodes carry no initial acceleration."""
-        force = self.Q - self.K @ u
+        force = self.Q - self.stiffness_product(u)
         return np.divide(force, self.M, out=np.zeros_like(force), where=self.M > 0)
 
     def step(self, u, v, a, step_index: int, t: float):
-        """One step; returns ``(u, v, a, iterations, strain, state)``."""
+        """One step; returns ``(u, v, a, iterations, strain, states)``.
+
+        Iterates ``x -> solve(states_of(x))`` until the states a solution was computed with are
+        its own. Where that cycles (a point at the edge of the contact zone, a slip direction
+        that flips), the next iterates move only a share ``omega`` of the way to the new solution,
+        halved at every cycle: a damped Newton method on the piecewise linear layer law.
+        """
         c, layer = self.c, self.layer
         predicted = u + (c.a2 / c.a0) * v + (c.a3 / c.a0) * a
-        state, seen = layer.state, set()
+        base = self.Q + c.a0 * self.M * predicted
+        states, current, omega, seen = layer.states, None, 1.0, []
         for iteration in range(1, MAX_STATE_ITERATIONS + 1):
-            seen.add(state.tobytes())
-            rhs = self.Q + c.a0 * self.M * predicted - layer.offset_force(state)
-            new = self._solve(state, rhs)
-            strain = layer.centre_strain(layer.T @ new)
-            next_state = layer.states_of(strain)
-            if np.array_equal(next_state, state):
+            new = self._solve(states, base - layer.offset_force(states))
+            strain = layer.strain(new)
+            following = layer.states_of(strain)
+            if following.close_to(states):
                 break
-            if next_state.tobytes() in seen:
-                raise ContactError(f"step {step_index} (t = {t:.6g} s): contact states cycle without settling "
-                                   f"after {iteration} iterations (state chattering)")
-            state = next_state
+            seen.append(states)
+            if any(following.close_to(other) for other in seen):
+                if omega <= MIN_RELAXATION:
+                    raise ContactError(f"step {step_index} (t = {t:.6g} s): contact states cycle without "
+                                       f"settling after {iteration} iterations (state chattering)")
+                omega, seen = 0.5 * omega, []
+            current = new if current is None else current + omega * (new - current)
+            states = following if omega == 1.0 else layer.states_of(layer.strain(current))
         else:
             raise ContactError(f"step {step_index} (t = {t:.6g} s): contact states did not settle in "
-                               f"{MAX_STATE_ITERATIONS} iterations")
-        closure = -(strain[:, NORMAL] + layer.gap / layer.h)
+                               f"{MAX_STATE_ITERATIONS} iterations (state chattering)")
+        closure = -(strain[..., NORMAL] + layer.gap / layer.h)
         self.max_closure = max(self.max_closure, float(closure.max()))
         if closure.max() >= 1.0:
             raise ContactError(f"step {step_index} (t = {t:.6g} s): the face went through the wall (layer "
                                f"compressed {closure.max():.3g} times its thickness): raise layer_stiffness "
                                f"or lower dt")
-        layer.commit(strain, state)
+        layer.commit(strain, states)
         acc = c.a0 * (new - predicted)
         vel = v + c.a6 * a + c.a7 * acc
-        return new, vel, acc, iteration, strain, state
+        return new, vel, acc, iteration, strain, states

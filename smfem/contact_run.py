@@ -13,7 +13,8 @@ import numpy as np
 
 from .contact import ContactError, ContactLayer, ContactNewmark
 from .fields import field_mesh
-from .model import ModelError
+from .fourier import Mode
+from .model import Model, ModelError
 from .probes import ProbeSet
 from .result import RunResult
 
@@ -21,12 +22,28 @@ from .result import RunResult
 ENERGY_GAIN_LIMIT = 0.01
 
 
-def _energy(stepper, layer, u, v, strain, state) -> float:
-    """Kinetic + strain energy of the rod and the layer (per radian: the model's integrals)."""
-    rod = 0.5 * v @ (stepper.M * v) + 0.5 * u @ (stepper.K @ u)
-    sigma = layer.stress(strain, state)
-    total_strain = strain + layer.offset_strain(state)
-    return float(rod + 0.5 * np.einsum("er,er,e->", sigma, total_strain, layer.ops.sqrt_g))
+def contact_model(case) -> Model:
+    """The model of a contact run: harmonic 0 alone for an axisymmetric scene, else every mode
+    the symmetry of the wall allows (the layer's states couple them)."""
+    return Model(case) if case.axisymmetric else Model(case, nonlinear=True)
+
+
+def _energy(stepper, layer, u, v, strain, states) -> float:
+    """Kinetic + strain energy of the body and the layer (the model's integrals over x3)."""
+    body = 0.5 * v @ (stepper.M * v) + 0.5 * u @ stepper.stiffness_product(u)
+    return float(body + layer.energy(strain, states))
+
+
+def _mean_axial_velocity_row(model, stepper) -> np.ndarray:
+    """Row giving the mass-weighted mean axial velocity (momentum / mass) of stacked amplitudes:
+    only harmonic 0 carries a mean."""
+    row = np.zeros(model.n_dof)
+    for i, (s, m_full) in enumerate(zip(model.systems, stepper.m_full)):
+        if s.mode == Mode(0, "c"):
+            axial = np.zeros_like(m_full)
+            axial[1::3] = m_full[1::3]  # x2 = z is the axis of the rod
+            row[stepper.offsets[i]:stepper.offsets[i + 1]] = (s.T.T @ axial) / axial.sum()
+    return row
 
 
 def solve_contact(case, model, progress=None, with_fields=False, cpu0=None, massless_face=True) -> RunResult:
@@ -36,21 +53,17 @@ def solve_contact(case, model, progress=None, with_fields=False, cpu0=None, mass
     stepper = ContactNewmark(model, layer, case.dt, massless_face)
     linear = [q for q in case.probes if q.kind == "point"]
     probes = ProbeSet(model, linear)
-    T = model.systems[0].T
-    m_full = stepper.m_full
-    axial = np.zeros_like(m_full)
-    axial[1::3] = m_full[1::3]  # x2 = z is the axis of the rod
-    velocity_row = (T.T @ axial) / axial.sum()
+    velocity_row = _mean_axial_velocity_row(model, stepper)
     for q in case.probes:
         if q.kind != "point" and (q.kind, q.field) not in (("edge_mean", "sigma"), ("body_mean", "v")):
             raise ModelError(f"{case.name}: probe {q.name!r} ({q.kind} of {q.field}) is not available with contact")
     names = list(case.probe_names)
     n = case.n_steps
     values = np.full((n + 1, len(names)), np.nan)
-    u = np.zeros(T.shape[1])
-    v = model.systems[0].V0.copy()
+    u = np.zeros(model.n_dof)
+    v = np.concatenate([s.V0 for s in model.systems])
     a = stepper.initial_acceleration(u)
-    strain, state = layer.centre_strain(T @ u), layer.state
+    strain, states = layer.strain(u), layer.states
 
     def record(k):
         point = dict(zip(probes.names, probes.evaluate(u, v)))
@@ -58,26 +71,27 @@ def solve_contact(case, model, progress=None, with_fields=False, cpu0=None, mass
             if q.kind == "point":
                 values[k, j] = point[q.name]
             elif q.kind == "edge_mean" and q.field == "sigma":
-                values[k, j] = layer.mean_normal_stress(strain, state)
+                values[k, j] = layer.mean_normal_stress(strain, states)
             elif q.kind == "body_mean" and q.field == "v":
                 values[k, j] = velocity_row @ v
 
     record(0)
-    energy_before = _energy(stepper, layer, u, v, strain, state)
-    iterations, message, contact_steps = [], "", []
+    energy_before = _energy(stepper, layer, u, v, strain, states)
+    iterations, message, contact_steps, closed = [], "", [], [0.0]
     for k in range(1, n + 1):
         try:
-            u, v, a, its, strain, state = stepper.step(u, v, a, k, k * case.dt)
+            u, v, a, its, strain, states = stepper.step(u, v, a, k, k * case.dt)
         except ContactError as exc:
             message = str(exc)
             break
         iterations.append(its)
-        if (state != 0).any():
+        closed.append(layer.closed_fraction(states))
+        if closed[-1] > 0:
             contact_steps.append(k)
         record(k)
         if progress:
             progress(k, n)
-    energy_after = _energy(stepper, layer, u, v, strain, state)
+    energy_after = _energy(stepper, layer, u, v, strain, states)
     gain = energy_after / energy_before - 1 if energy_before > 0 else 0.0
     if not message and not case.loads and gain > ENERGY_GAIN_LIMIT:
         # nothing does work on the rod: energy can only stay or be dissipated by friction
@@ -86,16 +100,20 @@ def solve_contact(case, model, progress=None, with_fields=False, cpu0=None, mass
     done = len(iterations) + 1
     its = np.array(iterations or [0])
     window = [contact_steps[0] * case.dt, contact_steps[-1] * case.dt] if contact_steps else None
+    u_modes = [u[a:b] for a, b in zip(stepper.offsets[:-1], stepper.offsets[1:])]
     return RunResult(
         t=np.arange(done) * case.dt, history={name: values[:done, j] for j, name in enumerate(names)},
         n_dof=model.n_dof, iterations=iterations, converged=not message, message=message,
         cpu_time_s=time.process_time() - cpu0,
-        mesh=field_mesh(model, [u]) if with_fields else None,
+        mesh=field_mesh(model, u_modes) if with_fields else None,
         info={"harmonics_used": model.harmonics_used(), "factorizations": stepper.factorizations,
-              "n_elements": model.mesh.n_elements, "layer_elements": len(layer.state),
-              "solve": "contact layer (17)-(19): states iterated per step, factorizations cached by state",
+              "n_elements": model.mesh.n_elements, "layer_elements": layer.n_elements,
+              "layer_points_x3": int(layer.states.kind.shape[1]),
+              "solve": "contact layer (17)-(19): states per layer Gauss point and point along x3, iterated per "
+                       "step; one factorization per mode, the layer's face matrix by Woodbury",
               "iterations_mean": float(its.mean()), "iterations_max": int(its.max()),
               "energy_before": energy_before,
               "energy_after": energy_after,
-              "contact_window": window, "max_layer_compression": stepper.max_closure},
+              "contact_window": window, "max_layer_compression": stepper.max_closure,
+              "closed_fraction": closed},
     )

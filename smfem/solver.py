@@ -68,9 +68,9 @@ def solve(case, progress=None, with_fields: bool = True, direct: bool | None = N
     if case.wall is not None:
         if plastic:
             raise ModelError(f"{case.name}: contact with plasticity is not supported: set plastic=false")
-        from .contact_run import solve_contact
+        from .contact_run import contact_model, solve_contact
 
-        return solve_contact(case, Model(case), progress, with_fields, cpu0)
+        return solve_contact(case, contact_model(case), progress, with_fields, cpu0)
     model = Model(case, nonlinear=plastic)
     coupled = bool(model.coupling)
     use_direct = coupled and (model.coupled_nonzeros() <= DIRECT_MAX_NONZEROS if direct is None else direct)

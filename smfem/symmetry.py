@@ -5,6 +5,7 @@ modes of a nonlinear run follow from that symmetry, not from the load alone:
 * ring: reflection about theta = 0 removes the sine family; a rotational period 2 pi / n keeps
   only harmonics that are multiples of n (n = 0: axisymmetric, harmonic 0 only);
 * prism: reflection about mid-span keeps the odd harmonics only.
+A tilted wall (``case.wall.slope``) gives a contact gap varying as cos(x3): the cosine family.
 """
 
 from __future__ import annotations
@@ -37,6 +38,9 @@ def x3_pattern(case, x3: np.ndarray) -> np.ndarray:
         for a, b in cut.x3_intervals:
             inside |= ((x3 - a) % period < (b - a)) if case.body == RING else ((x3 > a) & (x3 < b))
         out += next(weights) * inside
+    wall = getattr(case, "wall", None)
+    if wall is not None and wall.slope:
+        out += next(weights) * np.cos(x3)  # the gap of a tilted wall varies as r cos(x3)
     return out
 
 
