@@ -85,7 +85,8 @@ class Plastic(Elastic):
         self.alpha = np.zeros(model.n_qp)
 
     def _return(self, u):
-        return radial_return(self.strain(u), self.eps_p, self.alpha, self.model.lam, self.model.mu,
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):  # a diverged iterate: solve() says so
+            return radial_return(self.strain(u), self.eps_p, self.alpha, self.model.lam, self.model.mu,
                              self.sigma_y, self.H)
 
     def _tangent_lu(self, ret):
@@ -108,6 +109,9 @@ class Plastic(Elastic):
             du = lu.solve(r)
             u = u + du
             ret = self._return(u)
+            if not (np.isfinite(u).all() and np.isfinite(ret.sigma).all() and np.isfinite(ret.eps_p).all()):
+                # NaN compares false: a diverged iterate would otherwise pass for converged
+                raise NotConverged(f"Newton diverged at iteration {it} (non-finite displacement or stress)")
             done = not ret.yielding.any() if it == 1 else np.linalg.norm(du) <= self.tol * np.linalg.norm(u)
             if done:
                 self.sigma, self.eps_p, self.alpha = ret.sigma, ret.eps_p, ret.alpha

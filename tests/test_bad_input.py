@@ -207,6 +207,18 @@ def test_quasi_static_collapse_is_a_clear_error(solver):
 
 
 @pytest.mark.slow
+def test_diverged_plastic_newton_is_reported_not_written_as_nan():
+    """Found by the property test: E = 1e15 Pa, tau_s = 1 Pa, rho = 8e-7. The reference's
+    Newton ran to 5e147 and NaN stresses and passed for converged (NaN compares false); now it
+    stops the run (exit 3, the step named). About 50 s: the diverging iterates are slow."""
+    sets = {"harmonics": 5, "E": 1e15, "rho": 8.38503011040698e-07, "tau_s": 1.0, "notch_depth": 1.0177836226162974e-4,
+            "contrast": 0.2252876949381178, "refine": 1, "dim": 2, "dt": 3.2e-06, "t_end": 3.2e-06}
+    o = cli_outcome(run_args("notched_strip", "reference", sets))
+    assert o["code"] == 3 and np.isfinite(o["history"].to_numpy()).all()
+    assert o["stderr"].startswith("smfem: notched_strip: step 1 ") and "diverged" in o["stderr"]
+
+
+@pytest.mark.slow
 @settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(valid_run())
 def test_valid_parameters_many_random_examples(run):
