@@ -239,14 +239,13 @@ class ContactLayer:
         return np.bincount(self._scatter, k.ravel(), minlength=self.size**2).reshape(self.size, self.size)
 
     def offset_force(self, states: LayerStates) -> np.ndarray:
-        """Stacked reduced nodal forces of the offset strain, ``int B' D e_off``."""
+        """(n_modes, n_F) nodal forces of the offset strain on the face dofs, ``int B' D e_off``."""
         sigma = self.stress(np.zeros(states.kind.shape + (6,)), states)[..., TRACTION] * self.area[..., None]
         projected = np.einsum("iqr,eqr->ier", self.psi[..., TRACTION], sigma)
         per = np.einsum("ierk,ier->iek", self.B[:, :, TRACTION], projected)
         n_modes, nF = len(self.C), len(self.F)
-        face = np.bincount((np.arange(n_modes)[:, None, None] * nF + self.local[None]).ravel(), per.ravel(),
+        return np.bincount((np.arange(n_modes)[:, None, None] * nF + self.local[None]).ravel(), per.ravel(),
                            minlength=n_modes * nF).reshape(n_modes, nF)
-        return np.concatenate([C.T @ fi for C, fi in zip(self.C, face)])
 
     def commit(self, strain: np.ndarray, states: LayerStates) -> None:
         """End of a converged step: slipping points carry their slip; open points release it;
@@ -331,19 +330,22 @@ class ContactNewmark:
         """``K u`` of the body (all modes stacked)."""
         return np.concatenate([K @ ui for K, ui in zip(self.K, self._blocks(u))])
 
-    def _solve(self, states: LayerStates, rhs: np.ndarray) -> np.ndarray:
-        y = np.concatenate([lu.solve(r) for lu, r in zip(self.lus, self._blocks(rhs))])
-        if not (states.kind != OPEN).any():
-            return y
-        key = states.key()
-        k = self.face_blocks.get(key)
-        if k is None:
-            if len(self.face_blocks) >= CACHE_SIZE:
-                self.face_blocks.clear()
-            k = self.face_blocks[key] = self.layer.face_matrix(states)
-        c = np.linalg.solve(np.eye(len(k)) + k @ self.S, k @ self.layer.face_values(y).ravel())
-        c = c.reshape(len(self.Z), -1)
-        return y - np.concatenate([Z @ ci for Z, ci in zip(self.Z, c)])
+    def _solve(self, states: LayerStates, y: np.ndarray) -> np.ndarray:
+        """Solution with the layer in ``states``, given ``y = A0^-1 b`` of the step's load ``b``.
+
+        The layer's offset forces act on the face dofs only, ``C' f``, so their response is
+        ``Z f``: no back-substitution per iteration, one per mode and step."""
+        f = self.layer.offset_force(states)
+        if (states.kind != OPEN).any():
+            key = states.key()
+            k = self.face_blocks.get(key)
+            if k is None:
+                if len(self.face_blocks) >= CACHE_SIZE:
+                    self.face_blocks.clear()
+                k = self.face_blocks[key] = self.layer.face_matrix(states)
+            Cy = self.layer.face_values(y).ravel() - self.S @ f.ravel()
+            f = f + np.linalg.solve(np.eye(len(k)) + k @ self.S, k @ Cy).reshape(f.shape)
+        return y - np.concatenate([Z @ fi for Z, fi in zip(self.Z, f)])
 
     def initial_acceleration(self, u: np.ndarray) -> np.ndarray:
         """``M a = Q - K u``; the massless face nodes carry no initial acceleration."""
@@ -360,10 +362,11 @@ class ContactNewmark:
         """
         c, layer = self.c, self.layer
         predicted = u + (c.a2 / c.a0) * v + (c.a3 / c.a0) * a
-        base = self.Q + c.a0 * self.M * predicted
+        load = self.Q + c.a0 * self.M * predicted
+        base = np.concatenate([lu.solve(r) for lu, r in zip(self.lus, self._blocks(load))])
         states, current, omega, seen = layer.states, None, 1.0, []
         for iteration in range(1, MAX_STATE_ITERATIONS + 1):
-            new = self._solve(states, base - layer.offset_force(states))
+            new = self._solve(states, base)
             strain = layer.strain(new)
             following = layer.states_of(strain)
             if following.close_to(states):
