@@ -62,8 +62,10 @@ MAX_STATE_ITERATIONS = 60
 MIN_RELAXATION = 1.0 / 16
 #: a slip direction that moves less than this between iterations has settled
 DIRECTION_TOL = 1e-6
-#: layer points along the circumference per harmonic kept (products up to 2 l_max are exact)
-POINTS_PER_HARMONIC = 4
+#: layer points along the circumference per harmonic kept: products of harmonics are exact with
+#: 2, the edge of a contact zone needs more (tilted rod, 6 harmonics, against 16 per harmonic:
+#: 4 give contact_p 0.9 % and the struck rim 1.9 % off, 8 give 0.24 % and 0.29 %)
+POINTS_PER_HARMONIC = 8
 #: layer matrices kept per run, keyed by state (a few patterns recur)
 CACHE_SIZE = 64
 

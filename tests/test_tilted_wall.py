@@ -10,7 +10,7 @@ import pytest
 
 from cases import UnsupportedCase, get_case
 from reports.metrics import history_errors
-from smfem.contact import OPEN, ContactLayer
+from smfem.contact import POINTS_PER_HARMONIC, ContactLayer
 from smfem.contact_run import contact_model
 from smfem.model import ModelError
 from smfem.solver import solve
@@ -44,16 +44,16 @@ def test_the_layer_gap_follows_the_wall_around_the_circumference():
     assert [str(m) for m in layer.model.modes] == [f"{l}c" for l in range(6)]
     R = 0.05
     r = R - layer.gap[:, 0] / SLOPE  # each layer point's radius, from its gap at theta = 0
-    assert layer.gap.shape == (2 * 5, 4 * 6) and np.all((r > 0) & (r < R))
+    assert layer.gap.shape == (2 * 5, POINTS_PER_HARMONIC * 6) and np.all((r > 0) & (r < R))
     assert np.allclose(np.sort(r), np.sort(np.concatenate([np.arange(5) + 0.5 - 0.5 / 3**0.5,
                                                            np.arange(5) + 0.5 + 0.5 / 3**0.5])) * R / 5)
     assert np.allclose(layer.gap, SLOPE * (R - r[:, None] * np.cos(layer.x3)[None, :]), rtol=0, atol=1e-15)
 
 
 def test_contact_spreads_from_the_first_struck_rim_point(smfem_run):
-    # measured (refine 1, 6 harmonics): closed share of the face 0.75 % at 10 us, 14 % at
-    # 100 us, 76 % at 300 us, partial for 459 steps; at 100 us the rim at theta = 0 has moved
-    # -1.3 um, the opposite rim -534 um; energy change -2e-5
+    # measured (refine 1, 6 harmonics): closed share of the face 0.4 % at 10 us, 13 % at
+    # 100 us, 75 % at 300 us, partial for 464 steps; at 100 us the rim at theta = 0 has moved
+    # -1.4 um, the opposite rim -532 um; energy change -1.8e-5
     case, r = smfem_run
     assert r.converged, r.message
     closed = np.array(r.info["closed_fraction"])
@@ -70,9 +70,8 @@ def test_contact_spreads_from_the_first_struck_rim_point(smfem_run):
 
 
 def test_more_harmonics_change_little(smfem_run):
-    # measured, 6 against 12 harmonics (max-norm): contact_p 1.1 %, end_uz 0.27 %, rod_vz
-    # 0.08 %, rim_uz_0 2.9 % (the edge of the contact zone is where the harmonics resolve
-    # least), rim_uz_180 0.6 %
+    # measured, 6 against 12 harmonics (max-norm): contact_p 1.0 %, end_uz 0.25 %, rod_vz
+    # 0.07 %, rim_uz_0 1.1 %, rim_uz_180 0.7 %
     _, r6 = smfem_run
     r12 = solve(tilted(harmonics=12))
     for probe in ("contact_p", "end_uz", "rod_vz", "rim_uz_0", "rim_uz_180"):
@@ -83,11 +82,11 @@ def test_with_friction_histories_and_dissipation_agree_with_the_3d_reference():
     """Stick and slip around the circumference, the slip in two tangential directions (SMFEM:
     the layer's Coulomb cone; reference: Lagrange multipliers with Alart-Curnier states).
 
-    Measured (SMFEM refine 1, 6 harmonics, 8.8k dof, 6.6 s; reference 3D refine 1, 27k dof,
-    44 s), max-norm: contact_p 2.1 %, end_uz 1.2 %, rod_vz 0.3 %, rim_uz_180 1.4 %; where the
-    wall strikes first (rim_uz_0) the coarse section meshes differ most: 10 %, 7.6 % through
-    the 2R/c window (the slow test below shows both converge to the same history). Energy
-    lost to friction: 3.69 % (SMFEM), 3.60 % (reference).
+    Measured (SMFEM refine 1, 6 harmonics, 8.8k dof, 2.4 s; reference 3D refine 1, 27k dof,
+    29 s), max-norm: contact_p 2.5 %, end_uz 1.3 %, rod_vz 0.3 %, rim_uz_180 1.4 %; where the
+    wall strikes first (rim_uz_0) the coarse section meshes differ most: 10 %, 7.7 % through
+    the 2R/c window (it converges: the slow test below). Energy lost to friction: 3.67 %
+    (SMFEM), 3.60 % (reference); at refine 2 3.52 % and 3.47 %.
     """
     from reference_fem import solve as reference
 
@@ -108,9 +107,10 @@ def test_with_friction_histories_and_dissipation_agree_with_the_3d_reference():
 
 @pytest.mark.slow
 def test_histories_converge_to_the_finer_3d_reference():
-    """SMFEM refine 2, 12 harmonics (70.8k dof, 23 s) against the reference 3D at refine 2
-    (165k dof, 477 s), through the 2R/c window; measured: mid_szz 3.2 %, contact_p 0.3 %,
-    end_uz 0.2 %, rod_vz 0.1 %, rim_uz_0 2.6 % (5.6 % unfiltered), rim_uz_180 0.3 %."""
+    """SMFEM refine 2, 12 harmonics (70.8k dof, 18 s) against the reference 3D at refine 2
+    (165k dof, 364 s), through the 2R/c window; measured: mid_szz 3.2 %, contact_p 0.3 %,
+    end_uz 0.2 %, rod_vz 0.1 %, rim_uz_0 2.7 % (5.6 % unfiltered; 11 % at SMFEM refine 1),
+    rim_uz_180 0.3 % (``python benchmarks/tilted_wall.py --fine``)."""
     from reference_fem import solve as reference
 
     case = tilted(harmonics=12, refine=2)
