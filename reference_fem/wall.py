@@ -52,16 +52,15 @@ def case_wall_rows(model) -> WallRows:
     if wall.slope and model.rep == AXISYMMETRIC:
         raise UnsupportedCase("reference solver: a tilted wall (wall_slope > 0) is not axisymmetric: use dim=3")
     face = plane_face(model, wall.edge)
-    return wall_rows(face.nodes, face.normal, initial_gaps(model, face.nodes), model.free,
+    return wall_rows(face.nodes, face.normal, initial_gaps(model, face, face.nodes), model.free,
                      model.basis.N, wall.friction, PENETRATION_TOL * np.abs(model.rmesh.mesh.p).max())
 
 
-def initial_gaps(model, nodes: np.ndarray) -> np.ndarray:
+def initial_gaps(model, face, nodes: np.ndarray) -> np.ndarray:
     """The wall's initial gap at mesh ``nodes`` (a tilted wall's grows away from its first-struck
-    rim point: :class:`cases.geometry.Wall`); the face's nodes give the rim's position."""
-    wall = model.case.wall
+    rim point: :class:`cases.geometry.Wall`); the wall's ``face`` gives the rim's position."""
     x = model.rmesh.mesh.doflocs[0]  # first Cartesian coordinate (3D) or radius (axisymmetric)
-    return wall.gap_at(x[nodes], x[plane_face(model, wall.edge).nodes].max())
+    return model.case.wall.gap_at(x[nodes], x[face.nodes].max())
 
 
 class ContactLog:
@@ -75,7 +74,7 @@ class ContactLog:
         self.system = system
         model = system.model
         self.face = plane_face(model, model.case.wall.edge)
-        self.gap = initial_gaps(model, np.arange(model.rmesh.mesh.doflocs.shape[1]))  # at every node
+        self.gap = initial_gaps(model, self.face, np.arange(model.rmesh.mesh.doflocs.shape[1]))  # every node
         self.factor = 2 * np.pi if per_radian else 1.0
         self.energy = []
         self.contact_times = []

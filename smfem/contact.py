@@ -166,7 +166,8 @@ class ContactLayer:
         self.states = LayerStates(np.full(shape, OPEN), np.zeros(shape + (2,)), np.zeros(shape))
         # global rows/cols of every entry of the per-element face blocks, all mode pairs
         n_modes, nF = len(model.modes), len(self.F)
-        R = np.arange(n_modes)[:, None, None] * nF + self.local[None]  # (modes, n_e, 6)
+        R = np.arange(n_modes)[:, None, None] * nF + self.local[None]  # (modes, n_points, 6)
+        self._rows = R.ravel()  # position in the stacked face vector of every point's dofs
         self._scatter = (R[:, None, :, :, None] * (n_modes * nF) + R[None, :, :, None, :]).ravel()
         self.size = n_modes * nF
 
@@ -245,9 +246,7 @@ class ContactLayer:
         sigma = self.stress(np.zeros(states.kind.shape + (6,)), states)[..., TRACTION] * self.area[..., None]
         projected = np.einsum("iqr,eqr->ier", self.psi[..., TRACTION], sigma)
         per = np.einsum("ierk,ier->iek", self.B[:, :, TRACTION], projected)
-        n_modes, nF = len(self.C), len(self.F)
-        return np.bincount((np.arange(n_modes)[:, None, None] * nF + self.local[None]).ravel(), per.ravel(),
-                           minlength=n_modes * nF).reshape(n_modes, nF)
+        return np.bincount(self._rows, per.ravel(), minlength=self.size).reshape(len(self.C), len(self.F))
 
     def commit(self, strain: np.ndarray, states: LayerStates) -> None:
         """End of a converged step: slipping points carry their slip; open points release it;
@@ -314,8 +313,7 @@ class ContactNewmark:
         self.M = np.concatenate([s.T.multiply(s.T).T @ m for s, m in zip(systems, self.m_full)])
         self.c = newmark_constants(dt)
         self.offsets = layer.offsets
-        self.lus = [sla.splu((K + sp.diags(self.c.a0 * self.M[a:b])).tocsc())
-                    for K, a, b in zip(self.K, self.offsets[:-1], self.offsets[1:])]
+        self.lus = [sla.splu((K + sp.diags(self.c.a0 * M)).tocsc()) for K, M in zip(self.K, self.blocks(self.M))]
         self.factorizations = len(self.lus)
         self.Z = [lu.solve(C.T.toarray()) for lu, C in zip(self.lus, layer.C)]
         nF = len(layer.F)
@@ -325,12 +323,13 @@ class ContactNewmark:
         self.face_blocks: dict[bytes, np.ndarray] = {}
         self.max_closure = 0.0  # largest layer compression over the run, in layer thicknesses
 
-    def _blocks(self, vector: np.ndarray):
+    def blocks(self, vector: np.ndarray) -> list[np.ndarray]:
+        """The per-mode parts of a stacked vector."""
         return [vector[a:b] for a, b in zip(self.offsets[:-1], self.offsets[1:])]
 
     def stiffness_product(self, u: np.ndarray) -> np.ndarray:
         """``K u`` of the body (all modes stacked)."""
-        return np.concatenate([K @ ui for K, ui in zip(self.K, self._blocks(u))])
+        return np.concatenate([K @ ui for K, ui in zip(self.K, self.blocks(u))])
 
     def _solve(self, states: LayerStates, y: np.ndarray) -> np.ndarray:
         """Solution with the layer in ``states``, given ``y = A0^-1 b`` of the step's load ``b``.
@@ -365,7 +364,7 @@ class ContactNewmark:
         c, layer = self.c, self.layer
         predicted = u + (c.a2 / c.a0) * v + (c.a3 / c.a0) * a
         load = self.Q + c.a0 * self.M * predicted
-        base = np.concatenate([lu.solve(r) for lu, r in zip(self.lus, self._blocks(load))])
+        base = np.concatenate([lu.solve(r) for lu, r in zip(self.lus, self.blocks(load))])
         states, current, omega, seen = layer.states, None, 1.0, []
         for iteration in range(1, MAX_STATE_ITERATIONS + 1):
             new = self._solve(states, base)

@@ -100,12 +100,11 @@ def solve_contact(case, model, progress=None, with_fields=False, cpu0=None, mass
     done = len(iterations) + 1
     its = np.array(iterations or [0])
     window = [contact_steps[0] * case.dt, contact_steps[-1] * case.dt] if contact_steps else None
-    u_modes = [u[a:b] for a, b in zip(stepper.offsets[:-1], stepper.offsets[1:])]
     return RunResult(
         t=np.arange(done) * case.dt, history={name: values[:done, j] for j, name in enumerate(names)},
         n_dof=model.n_dof, iterations=iterations, converged=not message, message=message,
         cpu_time_s=time.process_time() - cpu0,
-        mesh=field_mesh(model, u_modes) if with_fields else None,
+        mesh=field_mesh(model, stepper.blocks(u)) if with_fields else None,
         info={"harmonics_used": model.harmonics_used(), "factorizations": stepper.factorizations,
               "n_elements": model.mesh.n_elements, "layer_elements": layer.n_elements,
               "layer_points_x3": int(layer.states.kind.shape[1]),

@@ -38,8 +38,7 @@ def x3_pattern(case, x3: np.ndarray) -> np.ndarray:
         for a, b in cut.x3_intervals:
             inside |= ((x3 - a) % period < (b - a)) if case.body == RING else ((x3 > a) & (x3 < b))
         out += next(weights) * inside
-    wall = getattr(case, "wall", None)
-    if wall is not None and wall.slope:
+    if case.wall is not None and case.wall.slope:
         out += next(weights) * np.cos(x3)  # the gap of a tilted wall varies as r cos(x3)
     return out
 
