@@ -9,13 +9,18 @@ yields) and refactorizes the consistent tangent only while points are yielding.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse.linalg as sla
 
 from . import forms
+from .linalg import factorize
 from .plasticity import equivalent_plastic_strain, radial_return
 
 #: Newton iterations allowed per step before the run stops as not converged
 MAX_ITERATIONS = 50
+#: full Newton steps before a step that does not lower the residual is halved (ideal
+#: plasticity near collapse can make Newton cycle: the notched strip at refine 2, step 88)
+LINE_SEARCH_AFTER = 10
+#: halvings of one Newton step at most
+LINE_SEARCH_HALVINGS = 6
 
 
 class NotConverged(RuntimeError):
@@ -41,7 +46,7 @@ class Elastic:
         self.M = model.M[free][:, free]
         self.K = model.stiffness()[free][:, free]
         self.A = (self.K + c * self.M).tocsc()
-        self.lu = sla.splu(self.A)
+        self.lu = factorize(self.A)
         self.factorizations = 1
         nc = forms.n_components(model.dim)
         self.sigma = np.zeros((model.n_qp, nc))
@@ -97,18 +102,30 @@ class Plastic(Elastic):
         dK = By.T @ (forms.material_blocks(ret.tangent[y] - self.model.D, self.model.weights[y]) @ By)
         self.factorizations += 1
         try:
-            return sla.splu((self.A + dK).tocsc())
+            return factorize(self.A + dK)
         except RuntimeError as exc:  # SuperLU: a singular tangent (collapse without inertia)
             raise NotConverged(f"the tangent is singular ({exc}): the body has collapsed") from None
+
+    def _residual(self, rhs, u, ret) -> np.ndarray:
+        return rhs - forms.internal_forces(self.B, self.model.weights, ret.sigma) - self.c * (self.M @ u)
 
     def solve(self, rhs, u):
         ret = self._return(u)
         lu = self.lu
+        r = self._residual(rhs, u, ret)
         for it in range(1, MAX_ITERATIONS + 1):
-            r = rhs - forms.internal_forces(self.B, self.model.weights, ret.sigma) - self.c * (self.M @ u)
             du = lu.solve(r)
-            u = u + du
-            ret = self._return(u)
+            step = 1.0
+            while True:
+                u_new = u + step * du
+                ret = self._return(u_new)
+                r_new = self._residual(rhs, u_new, ret)
+                # a full Newton step unless it has stalled: then halve it while that lowers the residual
+                if (it <= LINE_SEARCH_AFTER or step < 2.0**-LINE_SEARCH_HALVINGS
+                        or not np.linalg.norm(r_new) > np.linalg.norm(r)):
+                    break
+                step /= 2
+            du, u, r = step * du, u_new, r_new
             if not (np.isfinite(u).all() and np.isfinite(ret.sigma).all() and np.isfinite(ret.eps_p).all()):
                 # NaN compares false: a diverged iterate would otherwise pass for converged
                 raise NotConverged(f"Newton diverged at iteration {it} (non-finite displacement or stress)")

@@ -10,9 +10,10 @@ from __future__ import annotations
 from typing import Iterator
 
 import numpy as np
-import scipy.sparse.linalg as sla
 
 from cases.timeint import newmark_constants
+
+from .linalg import factorize
 
 
 def march(system, Q, u0: np.ndarray, v0: np.ndarray, dt: float, n_steps: int,
@@ -41,7 +42,7 @@ def march(system, Q, u0: np.ndarray, v0: np.ndarray, dt: float, n_steps: int,
     u, v = u0.copy(), v0.copy()
     r0 = load(0.0) - system.A @ u0 + system.c * (system.M @ u0)
     # no force, no acceleration: and massless contact nodes (a singular M) need no solve then
-    a = sla.splu(system.M.tocsc()).solve(r0) if np.any(r0) else np.zeros_like(u0)
+    a = factorize(system.M).solve(r0) if np.any(r0) else np.zeros_like(u0)
     for n in range(1, n_steps + 1):
         u_new, iterations = system.solve(load(n * dt) + system.M @ (c.a0 * u + c.a2 * v + c.a3 * a), u)
         a_new = c.a0 * (u_new - u) - c.a2 * v - c.a3 * a

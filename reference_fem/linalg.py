@@ -1,0 +1,15 @@
+"""The one sparse factorization of the reference solver."""
+
+from __future__ import annotations
+
+import scipy.sparse.linalg as sla
+
+
+def factorize(A) -> sla.SuperLU:
+    """LU factors of the square sparse matrix ``A`` (scipy SuperLU).
+
+    The minimum-degree ordering on the structure of ``A' + A`` suits the structurally symmetric
+    finite element matrices here: on the 2D notched cylinder (6.4k and 25k dofs) it fills 3.3
+    and 3.1 times less than SuperLU's default COLAMD and factorizes 3.6 and 3.8 times faster.
+    """
+    return sla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A")
