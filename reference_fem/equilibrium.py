@@ -21,6 +21,8 @@ MAX_ITERATIONS = 50
 LINE_SEARCH_AFTER = 10
 #: halvings of one Newton step at most
 LINE_SEARCH_HALVINGS = 6
+#: a residual this many times the step's first one means Newton diverges: stop at once
+DIVERGENCE = 1e6
 
 
 class NotConverged(RuntimeError):
@@ -113,6 +115,7 @@ class Plastic(Elastic):
         ret = self._return(u)
         lu = self.lu
         r = self._residual(rhs, u, ret)
+        first = np.linalg.norm(r) or np.inf  # no residual, no divergence to watch
         for it in range(1, MAX_ITERATIONS + 1):
             du = lu.solve(r)
             step = 1.0
@@ -129,6 +132,8 @@ class Plastic(Elastic):
             if not (np.isfinite(u).all() and np.isfinite(ret.sigma).all() and np.isfinite(ret.eps_p).all()):
                 # NaN compares false: a diverged iterate would otherwise pass for converged
                 raise NotConverged(f"Newton diverged at iteration {it} (non-finite displacement or stress)")
+            if np.linalg.norm(r) > DIVERGENCE * first:
+                raise NotConverged(f"Newton diverged at iteration {it} (the residual grew {DIVERGENCE:g} times)")
             done = not ret.yielding.any() if it == 1 else np.linalg.norm(du) <= self.tol * np.linalg.norm(u)
             if done:
                 self.sigma, self.eps_p, self.alpha = ret.sigma, ret.eps_p, ret.alpha
