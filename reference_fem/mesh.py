@@ -13,7 +13,8 @@ Resolution (``refine`` = ``case.params['refine']`` multiplies every refinable co
   axes marked not refinable (one element across a plane-strain width) keep one element;
 - circumference of a ring that is not axisymmetric: ``N_THETA * refine`` elements (64, a
   multiple of 8 so that the 45 degree patch and cut-out limits are nodes);
-- span of a prism: elements as long as the section's finest refinable element;
+- span of a prism: elements as long as the section grid's finest refinable element (before
+  break points split it);
 - a solid of revolution with an axis (3D dome, rod): an O-grid disk (a square centre block and
   four outer blocks) replaces the polar grid, so there is no degenerate element on the axis;
   its radial density follows the section's axis-direction count.
@@ -78,7 +79,25 @@ class MeshQuad2Curved(_Curved, MeshQuad2):
     """
 
     def element_finder(self, mapping=None):
-        return MeshQuad1(np.ascontiguousarray(self.p[:, : self.nvertices]), self.t).element_finder()
+        vertices = MeshQuad1(np.ascontiguousarray(self.p[:, : self.nvertices]), self.t)
+        find = vertices.element_finder()
+        centres = vertices.p[:, vertices.t].mean(axis=1)
+
+        def finder(x, y, _search_all=False):
+            try:
+                return find(x, y)
+            except ValueError:  # a point on a curved edge can fall a round-off outside the chords
+                return np.array([_one(find, centres, xi, yi) for xi, yi in zip(np.atleast_1d(x), np.atleast_1d(y))])
+
+        return finder
+
+
+def _one(find, centres: np.ndarray, x: float, y: float) -> int:
+    """The element of one point: found, or else the one with the nearest centre."""
+    try:
+        return int(find(np.array([x]), np.array([y]))[0])
+    except ValueError:
+        return int(np.argmin(np.hypot(centres[0] - x, centres[1] - y)))
 
 
 @dataclass(repr=False)
@@ -123,7 +142,9 @@ def build_mesh(case) -> RefMesh:
     if case.body == RING and rep != AXISYMMETRIC:
         x3_nodes = _span_nodes(0.0, 2 * np.pi, x3_extra, 2 * np.pi / (N_THETA * case.refine))
     elif case.body != RING:
-        h = min(np.diff(n).min() for n, a in ((s_nodes, sec.s), (t_nodes, sec.t)) if a.refinable)
+        # the section grid's own finest element, not one a break point cut short: a 0.1 mm
+        # notch would otherwise make 3000 elements along a 0.3 m span
+        h = min(np.diff(axis_nodes(a, scale)).min() for a in (sec.s, sec.t) if a.refinable)
         x3_nodes = _span_nodes(0.0, case.length, x3_extra, h)
     else:
         x3_nodes = None
