@@ -37,6 +37,8 @@ def case_figures(an: CaseAnalysis, out: Path) -> dict[str, str]:
         return made
     made["work_precision"] = f"figures/{name}-work-precision.png"
     figures.work_precision(an, out / made["work_precision"])
+    made["spatial"] = f"figures/{name}-spatial.png"
+    figures.spatial_precision(an, out / made["spatial"])
     made["histories"] = f"figures/{name}-histories.png"
     figures.histories(an, out / made["histories"])
     run = an.runs.fields

@@ -23,7 +23,7 @@ import pandas as pd
 from cases import get_case
 
 from .jobs import FAILED, Job, Outcome
-from .plan import SMFEM
+from .plan import MODAL, SMFEM
 
 #: packages whose source decides a solver's results
 SOURCES = {SMFEM: ("smfem", "cases"), "reference": ("reference_fem", "cases")}
@@ -63,7 +63,7 @@ class Run:
         """``r2 H40`` (refine, SMFEM harmonics), with ``dt`` when it is not the case's default."""
         p = self.summary["params"] if self.summary else self.job.build().params
         default_dt = get_case(self.job.case).params["dt"]
-        text = f"r{p.get('refine', 1)}" + (f" H{p.get('harmonics')}" if self.job.solver == SMFEM else "")
+        text = f"r{p.get('refine', 1)}" + (f" H{p.get('harmonics')}" if self.job.solver in (SMFEM, MODAL) else "")
         return text + (f" dt{p['dt']:g}" if p.get("dt", default_dt) != default_dt else "")
 
     @property

@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .analysis import CaseAnalysis  # noqa: E402
-from .metrics import TOLERANCE  # noqa: E402
+from .metrics import TARGETS, TRUTH_MARGIN  # noqa: E402
 from .plan import REF2D, REF3D, SMFEM  # noqa: E402
 from .references import published_points, theory_curves  # noqa: E402
 
@@ -21,47 +21,96 @@ LABEL = {SMFEM: "SMFEM", REF2D: "reference FEM 2D", REF3D: "reference FEM 3D"}
 
 
 def work_precision(an: CaseAnalysis, path: Path) -> Path:
-    """Error against CPU time, log-log, one line per solver, the tolerance as a dashed line."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    """Total error against CPU time, log-log: every run as a point, each solver's front as a
+    line, the targets dashed, and the band below three times the truth's uncertainty, where no
+    error can be measured, shaded."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.6))
+    plotted = False
     for solver, s in an.solvers.items():
-        pts = [(c, e, lab) for c, e, lab in zip(s.cpu, s.error, s.labels) if math.isfinite(e) and e > 0]
-        if not pts:
+        pts = s.points[np.isfinite(s.points.total) & (s.points.total > 0)] if len(s.points) else s.points
+        if not len(pts):
             ax.plot([], [], ls="none", **STYLE[solver], label=f"{LABEL[solver]}: {s.status}")
             continue
-        c, e, labels = zip(*pts)
-        ax.plot(c, e, **STYLE[solver], label=LABEL[solver])
-        for ci, ei, lab in pts:
-            ax.annotate(lab, (ci, ei), textcoords="offset points", xytext=(4, 4), fontsize=7, color=STYLE[solver]["color"])
-    ax.axhline(TOLERANCE, color="0.4", ls="--", lw=0.8, label=f"{100 * TOLERANCE:g} %")
-    ax.set(xscale="log", yscale="log", xlabel="CPU time of the solve, s", ylabel="relative max-norm error")
-    ax.set_title(f"{an.case.name}: error against CPU time\nreference: {an.reference.name if an.reference else 'none'}",
-                 fontsize=9)
+        plotted = True
+        ax.plot(pts.cpu, pts.total, ls="none", alpha=0.35, **STYLE[solver])
+        front = pts.set_index("label").loc[[lab for lab in s.front if lab in set(pts.label)]]
+        ax.plot(front.cpu, front.total, **STYLE[solver], label=f"{LABEL[solver]} (front)")
+        for lab, row in front.iterrows():
+            ax.annotate(lab, (row.cpu, row.total), textcoords="offset points", xytext=(4, 3), fontsize=6,
+                        color=STYLE[solver]["color"])
+    for target in TARGETS:
+        ax.axhline(target, color="0.4", ls="--", lw=0.8)
+        ax.annotate(f"{100 * target:g} %", (1.0, target), xycoords=("axes fraction", "data"), xytext=(-24, 2),
+                    textcoords="offset points", fontsize=7, color="0.3")
+    u = an.truth_uncertainty
+    if math.isfinite(u) and u > 0:
+        ax.axhspan(1e-12, TRUTH_MARGIN * u, color="0.85", zorder=0,
+                   label=f"below {TRUTH_MARGIN:g} x truth uncertainty ({100 * u:.2g} %)")
+    ax.set(xlabel="CPU time of the solve, s", ylabel="total error (relative max-norm)")
+    if not plotted:
+        ax.text(0.5, 0.5, "no run compared with a truth", ha="center", transform=ax.transAxes)
+        return _save(fig, ax, path, f"{an.case.name}: no truth")
+    ax.set(xscale="log", yscale="log")
+    ymin = min([s.points.total[s.points.total > 0].min() for s in an.solvers.values()
+                if len(s.points) and (s.points.total > 0).any()] or [min(TARGETS)])
+    ax.set_ylim(0.5 * min(ymin, TRUTH_MARGIN * u if math.isfinite(u) and u > 0 else ymin), None)
+    return _save(fig, ax, path, f"{an.case.name}: total error against CPU time\ntruth: {an.truth.name}")
+
+
+def _save(fig, ax, path: Path, title: str) -> Path:
+    ax.set_title(title, fontsize=8)
     ax.grid(True, which="both", lw=0.3, alpha=0.5)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
 
 
-def _finest(runs):
+def spatial_precision(an: CaseAnalysis, path: Path) -> Path:
+    """The paper's comparison: error against the same-dt reference, runs at the case's dt."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    plotted = False
+    for solver, s in an.solvers.items():
+        pts = s.points[np.isfinite(s.points.spatial) & (s.points.spatial > 0)] if len(s.points) else s.points
+        if not len(pts):
+            continue
+        plotted = True
+        ax.plot(pts.cpu, pts.spatial, **STYLE[solver], label=LABEL[solver])
+        for row in pts.itertuples():
+            ax.annotate(row.label, (row.cpu, row.spatial), textcoords="offset points", xytext=(4, 3), fontsize=6,
+                        color=STYLE[solver]["color"])
+    ax.set(xlabel="CPU time of the solve, s", ylabel="relative max-norm difference")
+    if plotted:
+        ax.set(xscale="log", yscale="log")
+    return _save(fig, ax, path, f"{an.case.name}: at the case's dt, against "
+                 f"{an.reference.name if an.reference else 'none'}\n(spatial discretization only, as the paper compared)")
+
+
+def _most_accurate(an: CaseAnalysis, solver: str, runs):
+    """The solver's run with the smallest total error (else its last usable run)."""
+    s = an.solvers.get(solver)
+    if s is not None and len(s.points) and s.points.total.notna().any():
+        label = s.points.label.iloc[int(np.nanargmin(s.points.total.to_numpy()))]
+        return next(r for r in runs if r.label == label)
     usable = [r for r in runs if r.usable]
     return usable[-1] if usable else None
 
 
 def histories(an: CaseAnalysis, path: Path) -> Path:
-    """Each probe over time: the reference, each solver's finest run, published points, theory."""
+    """Each probe over time: the truth, each solver's most accurate run, published points, theory."""
     probes = an.case.probe_names
     fig, axes = plt.subplots(len(probes), 1, figsize=(6.4, 2.3 * len(probes) + 0.6), sharex=True, squeeze=False)
     theory = theory_curves(an.case)
     for ax, probe in zip(axes[:, 0], probes):
-        ref = an.reference
-        if ref is not None and probe in ref.values:
-            ax.plot(1e3 * ref.t, ref.values[probe], color="k", lw=2.2, alpha=0.35, label=ref.name)
-        if theory is not None and (ref is None or theory.name != ref.name) and probe in theory.values:
+        truth = an.truth
+        if truth is not None and probe in truth.values:
+            note = "" if truth.converged(probe) else " (no converged truth)"
+            ax.plot(1e3 * truth.t, truth.values[probe], color="k", lw=2.2, alpha=0.35, label=f"truth{note}")
+        if theory is not None and probe in theory.values:
             ax.plot(1e3 * theory.t, theory.values[probe], color="0.3", ls="--", lw=1, label=theory.name)
         for solver, runs in an.runs.series.items():
-            run = _finest(runs)
+            run = _most_accurate(an, solver, runs)
             if run is not None:
                 h = run.history
                 ax.plot(1e3 * h["t"], h[probe], color=STYLE[solver]["color"], lw=1,

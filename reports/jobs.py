@@ -14,14 +14,15 @@ from pathlib import Path
 
 from cases import UnsupportedCase, get_case
 
-from .plan import REF3D, SMFEM
+from .plan import MODAL, REF3D, SMFEM
 
 OK, NOT_CONVERGED, NOT_AVAILABLE, FAILED = "ok", "not converged", "not available", "failed"
 
 
 @dataclass(frozen=True)
 class Job:
-    """A case with overrides, run by one solver (``smfem``, ``reference-2d``, ``reference-3d``).
+    """A case with overrides, run by one solver (``smfem``, ``reference-2d``, ``reference-3d``,
+    ``reference-modal``).
 
     ``overrides`` is a sorted tuple of ``(key, value)`` so that a job can be hashed; ``fields``
     asks an SMFEM run for ``fields.vtu`` (and plastic zones, which plastic runs always draw).
@@ -34,7 +35,7 @@ class Job:
 
     @classmethod
     def make(cls, case: str, solver: str, overrides: dict, fields: bool = False) -> Job:
-        if solver != SMFEM:
+        if solver not in (SMFEM, MODAL):
             overrides = dict(overrides, dim=3 if solver == REF3D else 2)
         return cls(case, solver, tuple(sorted(overrides.items())), fields and solver == SMFEM)
 
@@ -61,6 +62,10 @@ def _solve(job: Job, case):
         from smfem.solver import solve
 
         return solve(case, with_fields=job.fields)
+    if job.solver == MODAL:
+        from reference_fem.modal import solve
+
+        return solve(case)
     from reference_fem import solve
 
     result = solve(case)
@@ -89,6 +94,6 @@ def execute(job: Job) -> Outcome:
     wall = time.perf_counter() - wall0
     with tempfile.TemporaryDirectory(prefix="smfem-job-") as tmp:
         out = Path(tmp)
-        write_run(out, case, "smfem" if job.solver == SMFEM else "reference", result, wall)
+        write_run(out, case, {SMFEM: "smfem", MODAL: MODAL}.get(job.solver, "reference"), result, wall)
         files = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
     return Outcome(OK if result.converged else NOT_CONVERGED, result.message, files)

@@ -1,4 +1,4 @@
-"""Error measures, observed orders, Richardson extrapolation, cost to reach a tolerance."""
+"""Error measures, observed orders, Richardson extrapolation, work-precision fronts, cost to a target."""
 
 from __future__ import annotations
 
@@ -9,9 +9,6 @@ import numpy as np
 from scipy.integrate import trapezoid
 from scipy.optimize import brentq
 
-#: error level of the headline table
-TOLERANCE = 0.01
-
 
 def moving_average(x: np.ndarray, width: int) -> np.ndarray:
     """Centred moving average over ``width`` samples, the ends held (no shrink at the edges)."""
@@ -21,28 +18,44 @@ def moving_average(x: np.ndarray, width: int) -> np.ndarray:
     return np.convolve(padded, np.ones(width) / width, mode="same")[width:-width]
 
 
+def common_grid(t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarray):
+    """Both histories on the coarser of the two time grids, over their common window.
+
+    A time-stepping run is known at its own steps only: on nested grids (dt halvings) this
+    compares at the coarser run's steps exactly, without interpolating between them.
+    Returns ``(times, a, b)``.
+    """
+    end = min(t[-1], t_ref[-1]) * (1 + 1e-12)
+    coarse_is_run = len(t) > 1 and len(t_ref) > 1 and np.median(np.diff(t)) > np.median(np.diff(t_ref)) * (1 + 1e-9)
+    grid = t if coarse_is_run else t_ref
+    grid = grid[grid <= end]
+    return grid, np.interp(grid, t, a), np.interp(grid, t_ref, b)
+
+
+def smoothed(x: np.ndarray, grid: np.ndarray, window: float) -> np.ndarray:
+    """``x`` seen through a moving average ``window`` s long (unchanged when ``window`` is 0)."""
+    if window <= 0 or len(grid) < 2:
+        return x
+    return moving_average(x, int(round(window / np.median(np.diff(grid)))))
+
+
 def history_errors(t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarray,
                    window: float = 0.0) -> tuple[float, float]:
     """Relative max-norm and L2 errors of history ``a`` against ``b`` over their common window.
 
-    ``max|a - b| / max|b|`` and ``sqrt(int (a - b)^2 dt / int b^2 dt)``, with ``a`` linearly
-    interpolated to the reference times ``t_ref`` (runs with another ``dt`` compare too).
+    ``max|a - b| / max|b|`` and ``sqrt(int (a - b)^2 dt / int b^2 dt)``, on the coarser of
+    the two time grids (:func:`common_grid`), so runs with another ``dt`` compare too.
     ``window`` (s): both histories are first seen through a moving average that long, for
     scenes whose shorter features no model converges on (the case's
     ``references['comparison_window_s']``, e.g. the rod's 2R/c). NaN when the reference is
     identically zero or the windows do not overlap.
     """
-    end = min(t[-1], t_ref[-1])
-    keep = t_ref <= end * (1 + 1e-12)
-    tr, b = t_ref[keep], b[keep]
-    if len(tr) < 2 or not np.any(b):
+    grid, a, b = common_grid(t, a, t_ref, b)
+    if len(grid) < 2 or not np.any(b):
         return math.nan, math.nan
-    a = np.interp(tr, t, a)
-    if window > 0:
-        width = int(round(window / np.median(np.diff(tr))))
-        a, b = moving_average(a, width), moving_average(b, width)
+    a, b = smoothed(a, grid, window), smoothed(b, grid, window)
     d = a - b
-    l2 = math.sqrt(trapezoid(d * d, tr) / trapezoid(b * b, tr))
+    l2 = math.sqrt(trapezoid(d * d, grid) / trapezoid(b * b, grid))
     return float(np.abs(d).max() / np.abs(b).max()), l2
 
 
@@ -114,52 +127,72 @@ def richardson(h, q) -> Richardson | None:
     return Richardson(p, q3 - d2 * h3**p / (h2**p - h3**p))
 
 
+#: error levels of the headline: CPU time to reach each
+TARGETS = (0.01, 0.05)
+#: a target is checked only if it is at least this many times the truth's uncertainty
+TRUTH_MARGIN = 3.0
+REACHED, NOT_REACHED, TRUTH_TOO_COARSE, NO_RUN = "reached", "not reached", "truth not fine enough", "no run"
+
+
+def pareto_front(cpu, err) -> list[int]:
+    """Indices of the runs on the work-precision front: sorted by CPU time, each with a smaller
+    error than every cheaper run (non-finite errors left out)."""
+    order = sorted((c, e, i) for i, (c, e) in enumerate(zip(cpu, err)) if math.isfinite(e) and c > 0)
+    front, best = [], math.inf
+    for c, e, i in order:
+        if e < best:
+            front.append(i)
+            best = e
+    return front
+
+
 @dataclass(frozen=True)
 class Cost:
-    """CPU time to reach a tolerance, as an interval ``[lo, hi]`` in s.
+    """What it costs one solver to reach an error ``target``.
 
-    ``how``: ``'interpolated'`` (lo = hi, log-log between the levels either side),
-    ``'coarsest'`` (already below at the cheapest level: lo = 0, hi its time) or
-    ``'not reached'`` (lo = the dearest level's time, hi = inf; ``best`` is the smallest error).
+    ``how``: ``'reached'`` (``cpu`` s, the CPU time of the cheapest run below the target, and
+    ``label``, its settings), ``'not reached'`` (``cpu`` = the dearest run's time, ``best`` =
+    the smallest error), ``'truth not fine enough'`` (the target is below :data:`TRUTH_MARGIN`
+    times the truth's uncertainty: no run can be said to reach it) or ``'no run'``.
     """
 
-    lo: float
-    hi: float
+    target: float
     how: str
+    cpu: float
+    label: str
     best: float
 
     def text(self) -> str:
-        if self.how == "interpolated":
-            return f"{self.hi:.3g}"
-        if self.how == "coarsest":
-            return f"<= {self.hi:.3g}"
-        return f"not reached (best {100 * self.best:.2g} %)" if math.isfinite(self.best) else "no run to compare"
+        if self.how == REACHED:
+            return f"{self.cpu:.3g} ({self.label})"
+        if self.how == NOT_REACHED:
+            return f"not reached (best {100 * self.best:.2g} %)"
+        return self.how
 
 
-def time_to_tolerance(cpu, err, tol: float = TOLERANCE) -> Cost:
-    """Where the work-precision curve (levels sorted by CPU time) first crosses ``tol``."""
-    pts = sorted((c, e) for c, e in zip(cpu, err) if math.isfinite(e) and c > 0)
-    if not pts:
-        return Cost(0.0, math.inf, "not reached", math.nan)
-    best = min(e for _, e in pts)
-    if pts[0][1] <= tol:
-        return Cost(0.0, pts[0][0], "coarsest", best)
-    for (c0, e0), (c1, e1) in zip(pts, pts[1:]):
-        if e1 <= tol:
-            s = (math.log(tol) - math.log(e0)) / (math.log(e1) - math.log(e0)) if e1 > 0 else 1.0
-            t = math.exp(math.log(c0) + s * (math.log(c1) - math.log(c0)))
-            return Cost(t, t, "interpolated", best)
-    return Cost(pts[-1][0], math.inf, "not reached", best)
+def cost_to(target: float, cpu, err, labels, truth_uncertainty: float = 0.0) -> Cost:
+    """The cheapest run of a series whose error is at most ``target``."""
+    runs = [(c, e, lab) for c, e, lab in zip(cpu, err, labels) if math.isfinite(e) and c > 0]
+    if not runs:
+        return Cost(target, NO_RUN, math.nan, "", math.nan)
+    best = min(e for _, e, _ in runs)
+    if not (target >= TRUTH_MARGIN * truth_uncertainty):  # NaN uncertainty: no truth to check against
+        return Cost(target, TRUTH_TOO_COARSE, math.nan, "", best)
+    below = sorted((c, lab) for c, e, lab in runs if e <= target)
+    if below:
+        return Cost(target, REACHED, below[0][0], below[0][1], best)
+    return Cost(target, NOT_REACHED, max(c for c, _, _ in runs), "", best)
 
 
 def speedup(reference: Cost, smfem: Cost) -> str:
-    """``reference / smfem`` CPU time to the tolerance, as a value or a bound (``> x``, ``< x``)."""
-    if not math.isfinite(smfem.best) or not math.isfinite(reference.best):
-        return "n/a"
-    if reference.how == smfem.how != "interpolated":
-        return "neither reaches it" if smfem.how == "not reached" else "both at the coarsest level"
-    lo = reference.lo / smfem.hi if smfem.hi > 0 else math.inf
-    hi = reference.hi / smfem.lo if smfem.lo > 0 else math.inf
-    if lo == hi:
-        return f"{lo:.3g}x"
-    return f"> {lo:.3g}x" if math.isinf(hi) else f"< {hi:.3g}x"
+    """``reference / smfem`` CPU time to the same target, as a value or a bound (``> x``: the
+    reference does not reach it even at its dearest run; ``< x``: SMFEM does not)."""
+    if TRUTH_TOO_COARSE in (reference.how, smfem.how) or NO_RUN in (reference.how, smfem.how):
+        return ""
+    if reference.how == REACHED and smfem.how == REACHED:
+        return f"{reference.cpu / smfem.cpu:.3g}x"
+    if smfem.how == REACHED:
+        return f"> {reference.cpu / smfem.cpu:.3g}x"
+    if reference.how == REACHED:
+        return f"< {reference.cpu / smfem.cpu:.3g}x"
+    return "neither reaches it"

@@ -1,26 +1,35 @@
-"""What a study runs: per case, series of runs (one per solver) over resolution levels.
+"""What a study runs: per case, series of runs (one per solver) over space and time levels,
+the run that the same-dt (spatial) comparison measures against, and how the truth is made.
 
 A level is a dict of ``--set`` overrides (``refine``, ``harmonics``, ``dt``); every run of a
 case also gets the case study's ``base`` overrides (a shorter window for a tiny study, say).
-The error reference of a case is one extra run, finer than any level of its series, unless an
-analytic history exists (:mod:`reports.references`).
+A series spans the mesh (and harmonics) and the time step together, so that its
+work-precision front is that of the total error (:mod:`reports.analysis`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from cases import ParameterError
+from cases import ParameterError, get_case
 
 SMFEM, REF2D, REF3D = "smfem", "reference-2d", "reference-3d"
 SOLVERS = (SMFEM, REF2D, REF3D)
-#: the ``--set`` keys that make a level; the one with most distinct values along a series is its h
+#: the reference's harmonic model integrated exactly in time (:mod:`reference_fem.modal`):
+#: a maker of truths, not a series of its own
+MODAL = "reference-modal"
+#: the ``--set`` keys that make a level
 RESOLUTION_KEYS = ("refine", "harmonics", "dt")
+#: time steps of the quick study's 3-D series, as divisors of the case's: twice, once and half
+#: the case's (3-D errors are mostly spatial, and a 3-D step is dear)
+THREE_D = (0.5, 1, 2)
+#: how a truth is made (:mod:`reports.truth`)
+MODAL_TRUTH, TIME_TRUTH = "modal", "time-step halving"
 
 
 @dataclass(frozen=True)
 class Series:
-    """Runs of one solver over levels, coarse to fine."""
+    """Runs of one solver over levels."""
 
     solver: str
     levels: tuple[dict, ...]
@@ -31,8 +40,37 @@ class Series:
 
 
 @dataclass(frozen=True)
+class TruthPlan:
+    """How the truth of a case is made, converged in space, harmonics and time.
+
+    ``modal`` (linear scenes homogeneous along x3): the harmonic model exactly in time, sampled
+    every ``dt / output_divisor``, over the ``refine`` ladder at the last of ``harmonics``
+    and over the ``harmonics`` ladder at the last ``refine`` (ratio 2 each; an axisymmetric
+    case has no harmonics ladder).
+
+    ``time-step halving`` (plastic, contact, cut-outs): ``solver`` on ``refine[0]`` at
+    ``dt / d`` for each of ``dt_divisors``, Richardson in dt where the observed order is near
+    2; the meshes ``refine`` at the case's dt correct it to the finest and bound what is left.
+    """
+
+    method: str
+    refine: tuple[int, ...]
+    harmonics: tuple[int, ...] = ()
+    dt_divisors: tuple[int, ...] = (1, 2, 4)
+    solver: str = REF2D
+    output_divisor: int = 16
+
+    def __post_init__(self):
+        if self.method not in (MODAL_TRUTH, TIME_TRUTH):
+            raise ValueError(f"truth method must be {MODAL_TRUTH!r} or {TIME_TRUTH!r}")
+        if self.method == TIME_TRUTH and (len(self.refine) < 2 or len(self.dt_divisors) < 3):
+            raise ValueError("a time-step-halving truth needs two meshes or more and at least three dt levels")
+
+
+@dataclass(frozen=True)
 class CaseStudy:
-    """The runs that measure one case: series per solver and the finest reference-FEM run.
+    """The runs that measure one case: series per solver, the finest reference-FEM run at the
+    case's dt (the same-dt comparison, as the paper made it) and the truth.
 
     The SMFEM run at the case's own settings (no level overrides) also writes ``fields.vtu``
     and plastic zones, for the 3-D view.
@@ -41,6 +79,7 @@ class CaseStudy:
     case: str
     series: tuple[Series, ...]
     reference: tuple[str, dict]
+    truth: TruthPlan | None = None
     base: dict = field(default_factory=dict)
 
 
@@ -48,72 +87,91 @@ def _s(solver, *levels):
     return Series(solver, tuple(levels))
 
 
-def quick() -> tuple[CaseStudy, ...]:
-    """The default report: every case at the paper's time step, meshes up to a few times the
-    paper's, so the whole study runs in a few minutes on two cores.
+def grid(case: str, spaces, divisors) -> tuple[dict, ...]:
+    """Every space level (dicts of ``refine``/``harmonics``) at every ``dt`` = the case's dt
+    over each of ``divisors`` (a divisor below 1: a longer step than the case's)."""
+    dt = get_case(case).dt
+    return tuple({**s, "dt": dt / d} if d != 1 else dict(s) for s in spaces for d in divisors)
 
-    The time step stays the paper's in every run (CASES.md: solver-to-solver differences are
-    spatial), so errors measure the spatial discretization only.
-    """
+
+def _r(*values):
+    return tuple({"refine": v} for v in values)
+
+
+def quick() -> tuple[CaseStudy, ...]:
+    """The default report: every solver over meshes up to a few times the paper's and at
+    least three time steps (the case's, half and a quarter of it, more where cheap), so that
+    the whole study, truths included, runs in minutes on two cores."""
     return (
         CaseStudy("dome", (
-            _s(SMFEM, {"refine": 1}, {"refine": 2}, {"refine": 4}, {"refine": 8}),
-            _s(REF2D, {"refine": 1}, {"refine": 2}, {"refine": 4}),
-            _s(REF3D, {"refine": 1}),
-        ), reference=(REF2D, {"refine": 8})),
+            _s(SMFEM, *grid("dome", _r(1, 2, 4, 8), (1, 2, 4, 8))),
+            _s(REF2D, *grid("dome", _r(1, 2, 4), (1, 2, 4))),
+            _s(REF3D, *grid("dome", _r(1), THREE_D)),
+        ), reference=(REF2D, {"refine": 8}), truth=TruthPlan(MODAL_TRUTH, refine=(1, 2, 4))),
         CaseStudy("thick_cylinder", (
-            _s(SMFEM, {"harmonics": 10}, {"harmonics": 20}, {"refine": 2, "harmonics": 40},
-               {"refine": 4, "harmonics": 80}),
-            _s(REF2D, {"refine": 1}, {"refine": 2}),
-            _s(REF3D, {"refine": 1}),
-        ), reference=(REF2D, {"refine": 3})),
+            _s(SMFEM, *grid("thick_cylinder", ({"harmonics": 20}, {"refine": 2, "harmonics": 40},
+                                               {"refine": 4, "harmonics": 80}), (1, 2, 4, 8, 16, 32))),
+            _s(REF2D, *grid("thick_cylinder", _r(1), (1, 2, 4, 8, 16)), *grid("thick_cylinder", _r(2), (1, 2, 4))),
+            _s(REF3D, *grid("thick_cylinder", _r(1), THREE_D)),
+        ), reference=(REF2D, {"refine": 3}),
+            truth=TruthPlan(MODAL_TRUTH, refine=(2, 4, 8), harmonics=(160, 320, 640))),
         CaseStudy("notched_cylinder", (
-            _s(SMFEM, {"harmonics": 10}, {"harmonics": 20}, {"harmonics": 40}),
-            _s(REF2D, {"refine": 1}),
-            _s(REF3D, {"refine": 1}),
-        ), reference=(REF2D, {"refine": 2})),
+            _s(SMFEM, *grid("notched_cylinder", ({"harmonics": 10}, {"harmonics": 20}, {"harmonics": 40},
+                                                 {"refine": 2, "harmonics": 40}), (1, 2, 4))),
+            _s(REF2D, *grid("notched_cylinder", _r(1), (1, 2, 4)), {"refine": 2}, {"refine": 3}),
+            _s(REF3D, *grid("notched_cylinder", _r(1), THREE_D)),
+        ), reference=(REF2D, {"refine": 3}), truth=TruthPlan(TIME_TRUTH, refine=(1, 2, 3))),
         CaseStudy("notched_strip", (
-            _s(SMFEM, {"harmonics": 20}, {"harmonics": 40}, {"harmonics": 80}),
-            _s(REF2D, {"refine": 1}),
-            _s(REF3D, {"refine": 1}),
-        ), reference=(REF2D, {"refine": 2})),
+            _s(SMFEM, *grid("notched_strip", ({"harmonics": 20}, {"harmonics": 40}, {"harmonics": 80}), (1, 2, 4))),
+            _s(REF2D, *grid("notched_strip", _r(1), (1, 2, 4)), {"refine": 2}),
+            _s(REF3D, *grid("notched_strip", _r(1), THREE_D)),
+        ), reference=(REF2D, {"refine": 2}), truth=TruthPlan(TIME_TRUTH, refine=(1, 2))),
         CaseStudy("rod_impact", (
-            _s(SMFEM, {"refine": 1}, {"refine": 2}, {"refine": 4}),
-            _s(REF2D, {"refine": 1}, {"refine": 2}),
-            _s(REF3D, {"refine": 1}),
-        ), reference=(REF2D, {"refine": 4})),
+            _s(SMFEM, *grid("rod_impact", _r(1, 2, 4), (1, 2, 4))),
+            _s(REF2D, *grid("rod_impact", _r(1, 2), (1, 2, 4)), {"refine": 4}),
+            _s(REF3D, *grid("rod_impact", _r(1), THREE_D)),
+        ), reference=(REF2D, {"refine": 4}), truth=TruthPlan(TIME_TRUTH, refine=(2, 4))),
     )
 
 
 def full() -> tuple[CaseStudy, ...]:
-    """The larger study: finer levels, 3-D at two meshes where affordable, a finer reference."""
+    """The larger study: finer meshes, more time steps, 3-D at two meshes where affordable,
+    finer truths."""
     return (
         CaseStudy("dome", (
-            _s(SMFEM, {"refine": 1}, {"refine": 2}, {"refine": 4}, {"refine": 8}, {"refine": 16}),
-            _s(REF2D, {"refine": 1}, {"refine": 2}, {"refine": 4}, {"refine": 8}),
-            _s(REF3D, {"refine": 1}, {"refine": 2}),
-        ), reference=(REF2D, {"refine": 16})),
+            _s(SMFEM, *grid("dome", _r(1, 2, 4, 8, 16), (1, 2, 4, 8, 16))),
+            _s(REF2D, *grid("dome", _r(1, 2, 4, 8), (1, 2, 4, 8))),
+            _s(REF3D, *grid("dome", _r(1), (1, 2, 4)), *grid("dome", _r(2), (1, 2, 4))),
+        ), reference=(REF2D, {"refine": 16}), truth=TruthPlan(MODAL_TRUTH, refine=(2, 4, 8))),
         CaseStudy("thick_cylinder", (
-            _s(SMFEM, {"harmonics": 10}, {"harmonics": 20}, {"refine": 2, "harmonics": 40},
-               {"refine": 4, "harmonics": 80}, {"refine": 8, "harmonics": 80}),
-            _s(REF2D, {"refine": 1}, {"refine": 2}, {"refine": 3}),
-            _s(REF3D, {"refine": 1}, {"refine": 2}),
-        ), reference=(REF2D, {"refine": 4})),
+            _s(SMFEM, *grid("thick_cylinder", ({"harmonics": 20}, {"refine": 2, "harmonics": 40},
+                                               {"refine": 4, "harmonics": 80}, {"refine": 8, "harmonics": 160}),
+                            (1, 2, 4, 8, 16, 32, 64))),
+            _s(REF2D, *grid("thick_cylinder", _r(1, 2), (1, 2, 4, 8, 16, 32)), *grid("thick_cylinder", _r(3), (1, 4, 16))),
+            _s(REF3D, *grid("thick_cylinder", _r(1), (1, 2, 4, 8)), *grid("thick_cylinder", _r(2), (1, 2, 4))),
+        ), reference=(REF2D, {"refine": 4}),
+            truth=TruthPlan(MODAL_TRUTH, refine=(4, 8, 16), harmonics=(320, 640, 1280))),
         CaseStudy("notched_cylinder", (
-            _s(SMFEM, {"harmonics": 10}, {"harmonics": 20}, {"harmonics": 40}, {"refine": 2, "harmonics": 40}),
-            _s(REF2D, {"refine": 1}, {"refine": 2}),
-            _s(REF3D, {"refine": 1}),
-        ), reference=(REF2D, {"refine": 3})),
+            _s(SMFEM, *grid("notched_cylinder", ({"harmonics": 10}, {"harmonics": 20}, {"harmonics": 40},
+                                                 {"refine": 2, "harmonics": 40}, {"refine": 2, "harmonics": 80}),
+                            (1, 2, 4, 8))),
+            _s(REF2D, *grid("notched_cylinder", _r(1), (1, 2, 4, 8)), *grid("notched_cylinder", _r(2), (1, 2, 4, 8))),
+            _s(REF3D, *grid("notched_cylinder", _r(1), (0.5, 1, 2, 4))),
+        ), reference=(REF2D, {"refine": 3}),
+            truth=TruthPlan(TIME_TRUTH, refine=(2, 3), dt_divisors=(1, 2, 4, 8))),
         CaseStudy("notched_strip", (
-            _s(SMFEM, {"harmonics": 20}, {"harmonics": 40}, {"harmonics": 80}, {"harmonics": 120}),
-            _s(REF2D, {"refine": 1}, {"refine": 2}),
-            _s(REF3D, {"refine": 1}, {"refine": 2}),
-        ), reference=(REF2D, {"refine": 3})),
+            _s(SMFEM, *grid("notched_strip", ({"harmonics": 40}, {"harmonics": 80}, {"harmonics": 160},
+                                              {"harmonics": 320}), (1, 2, 4, 8))),
+            _s(REF2D, *grid("notched_strip", _r(1), (1, 2, 4, 8)), *grid("notched_strip", _r(2), (1, 2, 4))),
+            _s(REF3D, *grid("notched_strip", _r(1), (0.5, 1, 2, 4))),
+        ), reference=(REF2D, {"refine": 3}),
+            truth=TruthPlan(TIME_TRUTH, refine=(2, 3), dt_divisors=(1, 2, 4, 8))),
         CaseStudy("rod_impact", (
-            _s(SMFEM, {"refine": 1}, {"refine": 2}, {"refine": 4}),
-            _s(REF2D, {"refine": 1}, {"refine": 2}, {"refine": 4}),
-            _s(REF3D, {"refine": 1}),
-        ), reference=(REF2D, {"refine": 8})),
+            _s(SMFEM, *grid("rod_impact", _r(1, 2, 4, 8), (1, 2, 4, 8))),
+            _s(REF2D, *grid("rod_impact", _r(1, 2, 4), (1, 2, 4, 8))),
+            _s(REF3D, *grid("rod_impact", _r(1), (0.5, 1, 2, 4))),
+        ), reference=(REF2D, {"refine": 8}),
+            truth=TruthPlan(TIME_TRUTH, refine=(4, 8), dt_divisors=(1, 2, 4, 8))),
     )
 
 

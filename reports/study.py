@@ -14,19 +14,25 @@ from .cache import Run, RunCache
 from .executors import run_jobs
 from .jobs import Job
 from .plan import REF3D, SMFEM, CaseStudy
+from .truth import Truth, assemble
+from .truth import jobs as truth_jobs
 
 
 @dataclass
 class CaseRuns:
-    """The runs of one case study: ``series[solver]`` in level order, and the reference run."""
+    """The runs of one case study: ``series[solver]`` in level order, the reference run of the
+    same-dt comparison, and the truth (None when the study has no truth plan or a run it needs
+    has no history) with its runs by role."""
 
     study: CaseStudy
     series: dict[str, list[Run]]
     reference: Run
     fields: Run | None
+    truth: Truth | None = None
+    truth_runs: dict = field(default_factory=dict)
 
     def all_runs(self) -> list[Run]:
-        return [r for runs in self.series.values() for r in runs] + [self.reference]
+        return [r for runs in self.series.values() for r in runs] + [self.reference, *self.truth_runs.values()]
 
 
 @dataclass
@@ -39,9 +45,10 @@ class StudyResult:
     wall_time_s: float = 0.0
 
 
-def _jobs(study: CaseStudy) -> tuple[dict, Job, Job]:
-    """Jobs of the series, of the reference run and of the SMFEM run at the case's settings,
-    which writes fields.vtu (the series run with those parameters, when there is one)."""
+def _jobs(study: CaseStudy) -> tuple[dict, Job, Job, dict]:
+    """Jobs of the series, of the reference run, of the SMFEM run at the case's settings,
+    which writes fields.vtu (the series run with those parameters, when there is one), and of
+    the truth by role."""
     def params(level):
         return get_case(study.case, {**study.base, **level}).params
 
@@ -53,7 +60,8 @@ def _jobs(study: CaseStudy) -> tuple[dict, Job, Job]:
 
     series = {s.solver: [job(s.solver, level) for level in s.levels] for s in study.series}
     fields = next((j for j in series.get(SMFEM, ()) if j.fields), None) or job(SMFEM, {})
-    return series, job(*study.reference), fields
+    truth = truth_jobs(study.case, study.truth, study.base) if study.truth else {}
+    return series, job(*study.reference), fields, truth
 
 
 def _cost_order(job: Job) -> tuple:
@@ -62,9 +70,29 @@ def _cost_order(job: Job) -> tuple:
     return (job.solver != REF3D, -o.get("refine", 1), -o.get("harmonics", 0))
 
 
+def run_cached(jobs: list[Job], cache: RunCache, scheduler: str | None = None, workers: int = 2,
+               progress: bool = True) -> tuple[dict, list[Job], int]:
+    """Every run of ``jobs``, from ``cache`` or executed (longest first) and stored there.
+
+    Returns the runs by job, the jobs executed and how many runs came from the cache.
+    """
+    # one run per cache entry: different overrides may resolve to the same parameters
+    wanted = {}
+    for job in jobs:
+        wanted.setdefault(cache.path(job), job)
+    found = {path: run for path, job in wanted.items() if (run := cache.load(job)) is not None}
+    missing = sorted((job for path, job in wanted.items() if path not in found), key=_cost_order)
+    with tqdm(total=len(missing), desc="study", unit="run", file=sys.stderr, disable=not progress or None) as bar:
+        for job, outcome in run_jobs(missing, scheduler, workers):
+            found[cache.path(job)] = cache.store(job, outcome)
+            bar.set_postfix_str(job.describe(), refresh=False)
+            bar.update()
+    return {job: found[cache.path(job)] for job in jobs}, missing, len(wanted) - len(missing)
+
+
 def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | None = None, workers: int = 2,
               progress: bool = True) -> StudyResult:
-    """Run (or take from ``cache``) every run of ``plan``.
+    """Run (or take from ``cache``) every run of ``plan``, and assemble each case's truth.
 
     Parameters
     ----------
@@ -76,21 +104,13 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
     """
     wall0 = time.perf_counter()
     layout = [(study, *_jobs(study)) for study in plan]
-    # one run per cache entry: different overrides may resolve to the same parameters
-    wanted = {}
-    for _, series, ref, fields in layout:
-        for job in [*sum(series.values(), []), ref, fields]:
-            wanted.setdefault(cache.path(job), job)
-    found = {path: run for path, job in wanted.items() if (run := cache.load(job)) is not None}
-    missing = sorted((job for path, job in wanted.items() if path not in found), key=_cost_order)
-    with tqdm(total=len(missing), desc="study", unit="run", file=sys.stderr, disable=not progress or None) as bar:
-        for job, outcome in run_jobs(missing, scheduler, workers):
-            found[cache.path(job)] = cache.store(job, outcome)
-            bar.set_postfix_str(job.describe(), refresh=False)
-            bar.update()
-    runs = {job: found[cache.path(job)] for _, series, ref, fields in layout
-            for job in [*sum(series.values(), []), ref, fields]}
-    cases = [CaseRuns(study, {s: [runs[j] for j in js] for s, js in series.items()}, runs[ref], runs[fields])
-             for study, series, ref, fields in layout]
-    return StudyResult(cases, executed=missing, cached=len(wanted) - len(missing),
-                       wall_time_s=time.perf_counter() - wall0)
+    every = [job for _, series, ref, fields, truth in layout
+             for job in [*sum(series.values(), []), ref, fields, *truth.values()]]
+    runs, executed, cached = run_cached(every, cache, scheduler, workers, progress)
+    cases = []
+    for study, series, ref, fields, truth in layout:
+        truth_runs = {role: runs[j] for role, j in truth.items()}
+        made = assemble(study.case, study.truth, study.base, truth_runs) if study.truth else None
+        cases.append(CaseRuns(study, {s: [runs[j] for j in js] for s, js in series.items()}, runs[ref], runs[fields],
+                              made, truth_runs))
+    return StudyResult(cases, executed=executed, cached=cached, wall_time_s=time.perf_counter() - wall0)

@@ -32,26 +32,27 @@ def summary(case, solver: str, result, wall_time_s: float) -> dict:
     }
 
 
-def _jsonable(x):
+def jsonable(x):
+    """``x`` with numpy scalars as Python numbers and non-finite floats as strings."""
     if isinstance(x, float) and not math.isfinite(x):
         return str(x)
     if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
+        return {k: jsonable(v) for k, v in x.items()}
     if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
+        return [jsonable(v) for v in x]
     if isinstance(x, np.generic):
         return x.item()
     return x
 
 
 def write_run(out: Path, case, solver: str, result, wall_time_s: float) -> None:
-    """Write history.csv (one row per computed step, t = 0 included), summary.json, fields.vtu,
+    """Write history.csv (one row per time of ``result.t``, t = 0 included), summary.json, fields.vtu,
     and for plastic runs plastic_zones.png with its data plastic_zones.npz."""
     out.mkdir(parents=True, exist_ok=True)
-    n = len(result.iterations) + 1
+    n = len(result.t)  # a run that stopped early has its converged steps only; a modal run no steps
     table = pd.DataFrame({"t": result.t[:n], **{k: v[:n] for k, v in result.history.items()}})
     table.to_csv(out / "history.csv", index=False, float_format="%.10g")
-    (out / "summary.json").write_text(json.dumps(_jsonable(summary(case, solver, result, wall_time_s)), indent=2))
+    (out / "summary.json").write_text(json.dumps(jsonable(summary(case, solver, result, wall_time_s)), indent=2))
     if result.mesh is not None:
         result.mesh.write(out / "fields.vtu")
     if getattr(result, "snapshots", None):

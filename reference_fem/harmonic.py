@@ -1,0 +1,301 @@
+"""Fourier-harmonic model of a body homogeneous along x3: one 2D problem per harmonic.
+
+For a ring or a prism whose material does not vary along x3, the harmonics of the displacement
+(ring: ``u_r, u_z ~ cos(l theta)``, ``u_theta ~ sin(l theta)``; prism: ``u1, u2 ~ sin(k x3)``,
+``u3 ~ cos(k x3)``, ``k = l pi / length``) decouple exactly, and each one is a 2D problem on
+the cross-section with three amplitude components ``(U, W, V)``. This module builds those
+problems with scikit-fem: quadratic quadrilaterals (``ElementQuad2``), full Gauss
+integration (order 4), consistent mass, on the section block of :mod:`cases.geometry`. It is
+the reference's own discretization, with nothing in common with the SMFEM element but the
+basis functions along x3 that the case's symmetry dictates (the separation of variables is
+exact for such bodies); :mod:`reference_fem.modal` integrates it exactly in time.
+
+A section axis marked not refinable (one element across a plane-strain width or axial length)
+is one the solution does not vary along: the nodes on each line across it share their
+amplitudes, which leaves a 1-D problem per harmonic (exact plane strain, since that axis's
+displacement is held at zero by the case's support on ``'all'``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from skfem import CellBasis, ElementQuad2, FacetBasis, LinearForm, asm
+
+from cases.geometry import PRISM, RING, interval_fourier
+from cases.params import UnsupportedCase
+
+from .frames import section_params
+from .mesh import Block, assemble_blocks, axis_nodes
+from .model import INTORDER
+
+#: components of a harmonic's amplitude vector, in dof order: U (x1), W (x2), V (x3)
+N_COMP = 3
+
+
+def _factors(body: str, l: int, length: float) -> tuple[float, float]:
+    """x3 integrals of the squared basis functions: ``(c_first, c_second)``.
+
+    Ring: ``int cos^2`` (U, W and the strains with cos) and ``int sin^2`` (V, the strains with
+    sin) over ``[0, 2 pi)``; prism: ``length / 2`` for both."""
+    if body == PRISM:
+        return length / 2, length / 2
+    return (2 * math.pi, 0.0) if l == 0 else (math.pi, math.pi)
+
+
+def unsupported_reason(case) -> str | None:
+    """Why ``case`` has no harmonic model (``None`` if it has one)."""
+    if case.cutouts and case.contrast < 1.0:
+        return "the material varies along x3 (cut-outs)"
+    if case.wall is not None:
+        return "contact with a wall is not linear"
+    if case.material.plastic:
+        return "plasticity couples the harmonics"
+    if not case.symmetric:
+        return "only the symmetric family of harmonics is built"
+    if case.initial_velocity:
+        return "only loads from rest are built"
+    bad = [p.name for p in case.probes if p.kind != "point" or p.field not in ("u", "v")]
+    if bad:
+        return f"probes {', '.join(bad)} are not point displacements or velocities"
+    return None
+
+
+@dataclass
+class Harmonic:
+    """One harmonic's reduced problem ``M a + K u = Q`` (free amplitudes).
+
+    Attributes
+    ----------
+    l : harmonic number (ring: 0, 1, ...; prism: 1, 2, ...)
+    K, M : csr matrices on the free amplitudes (N/m and kg, integrated over x3)
+    Q : (n,) load amplitudes (N)
+    P : (n_probes, n) probe rows: a probe's value is ``P @ u`` for this harmonic's share
+    """
+
+    l: int
+    K: sp.csr_matrix
+    M: sp.csr_matrix
+    Q: np.ndarray
+    P: np.ndarray
+
+
+class HarmonicModel:
+    """The per-harmonic problems of ``case`` at its ``refine`` and ``harmonics``.
+
+    Parameters
+    ----------
+    case : cases.Case, homogeneous along x3 and linear (see :func:`unsupported_reason`)
+    harmonics : harmonics kept (default ``case.harmonics``): ring ``l = 0 .. n-1``, prism
+        ``l = 1 .. n``; harmonics without load are skipped
+
+    Attributes
+    ----------
+    probes : names of the displacement (``'u'``) and velocity (``'v'``) point probes, in the
+        case's order
+    fields : ``'u'`` or ``'v'`` per probe
+    systems : list of :class:`Harmonic`, the loaded ones
+    n_dof : free amplitudes over all harmonics kept
+    """
+
+    def __init__(self, case, harmonics: int | None = None):
+        why = unsupported_reason(case)
+        if why:
+            raise UnsupportedCase(f"harmonic model: {case.name}: {why}")
+        self.case = case
+        self.probes = case.probe_names
+        self.fields = [p.field for p in case.probes]
+        sec = case.section
+        self.mesh = assemble_blocks([Block((axis_nodes(sec.s, case.refine), axis_nodes(sec.t, case.refine)),
+                                           lambda p: np.array(sec.to_x(p[0], p[1])))], lambda x: np.ones(x.shape[1], bool))
+        self.basis = CellBasis(self.mesh, ElementQuad2(), intorder=INTORDER)
+        self.tie = self._tie()
+        self._operators()
+        n = harmonics or case.harmonics
+        numbers = range(n) if case.body == RING else range(1, n + 1)
+        loads = {l: self._load(l) for l in numbers}
+        scale = max(np.abs(Q).max() for Q in loads.values())
+        # a load below round-off of the largest (cos 3 theta on the thick cylinder's patches) is none
+        self.systems = [h for h in (self._harmonic(l, Q) for l, Q in loads.items()
+                                    if np.abs(Q).max() > 1e-12 * scale) if h is not None]
+        if not self.systems:
+            raise UnsupportedCase(f"harmonic model: {case.name}: no harmonic carries a load")
+        self.n_dof = sum(h.K.shape[0] for h in self.systems)
+
+    # -- geometry and operators ------------------------------------------------------------
+    def _tie(self) -> sp.csr_matrix:
+        """Map reduced node values -> mesh node values: nodes on one line across a
+        non-refinable axis share their value (identity when every axis is refinable)."""
+        sec, dofs = self.case.section, self.basis.doflocs
+        N = self.basis.N
+        s, t = _section_params(sec, dofs)
+        if sec.s.refinable and sec.t.refinable:
+            return sp.identity(N, format="csr")
+        along = t if not sec.s.refinable else s  # the coordinate that varies
+        if not sec.s.refinable and not sec.t.refinable:
+            raise UnsupportedCase("harmonic model: a section with no refinable axis")
+        key = np.round(along / (np.ptp(along) or 1.0), 9)
+        _, group = np.unique(key, return_inverse=True)
+        return sp.csr_matrix((np.ones(N), (np.arange(N), group)), shape=(N, group.max() + 1))
+
+    def _operators(self) -> None:
+        """Sparse value and gradient operators at the quadrature points, ``(n_qp, n_nodes)``,
+        and the weights ``w`` (times r for a ring)."""
+        b = self.basis
+        nel, nqe = b.dx.shape
+        rows = np.broadcast_to(np.arange(nel * nqe).reshape(nel, nqe), (nel, nqe))
+        parts = {"phi": [], "d1": [], "d2": []}
+        cols = []
+        for i in range(b.Nbfun):
+            f = b.basis[i][0]
+            parts["phi"].append(np.asarray(f))
+            parts["d1"].append(f.grad[0])
+            parts["d2"].append(f.grad[1])
+            cols.append(np.broadcast_to(b.element_dofs[i][:, None], (nel, nqe)))
+        r = np.concatenate([rows.ravel()] * b.Nbfun)
+        c = np.concatenate([x.ravel() for x in cols])
+        shape = (nel * nqe, b.N)
+        ops = {k: sp.csr_matrix((np.concatenate([x.ravel() for x in v]), (r, c)), shape=shape) @ self.tie
+               for k, v in parts.items()}
+        self.phi, self.d1, self.d2 = ops["phi"], ops["d1"], ops["d2"]
+        x1 = np.asarray(b.global_coordinates())[0].ravel()
+        self.x1 = x1
+        self.w = b.dx.ravel() * (x1 if self.case.body == RING else 1.0)
+        lam, mu = self.case.material.lame
+        self.lam, self.mu = lam, mu
+
+    def _strains(self, l: int):
+        """Strain amplitude operators ``(n_qp, 3 n)`` of harmonic ``l`` in dof order (U, W, V):
+        ``normal`` (three), ``shear_first`` and ``shear_second`` (the shears integrated with the
+        first and the second x3 factor)."""
+        P, D1, D2 = self.phi, self.d1, self.d2
+        Z = sp.csr_matrix(P.shape)
+        row = lambda u, w, v: sp.hstack([u, w, v], format="csr")
+        if self.case.body == RING:
+            inv_r = sp.diags(1.0 / self.x1)
+            normal = [row(D1, Z, Z), row(Z, D2, Z), row(inv_r @ P, Z, l * (inv_r @ P))]
+            first = [row(D2, D1, Z)]
+            second = [row(-l * (inv_r @ P), Z, D1 - inv_r @ P), row(Z, -l * (inv_r @ P), D2)]
+        else:
+            k = l * math.pi / self.case.length
+            normal = [row(D1, Z, Z), row(Z, D2, Z), row(Z, Z, -k * P)]
+            first = [row(D2, D1, Z)]
+            second = [row(k * P, Z, D1), row(Z, k * P, D2)]
+        return normal, first, second
+
+    # -- one harmonic ------------------------------------------------------------------------
+    def _harmonic(self, l: int, Q: np.ndarray) -> Harmonic | None:
+        case = self.case
+        c1, c2 = _factors(case.body, l, case.length)
+        normal, first, second = self._strains(l)
+        W = sp.diags(self.w)
+        lam, mu = self.lam, self.mu
+        trace = normal[0] + normal[1] + normal[2]
+        K = c1 * (lam * trace.T @ W @ trace + 2 * mu * sum(e.T @ W @ e for e in normal)
+                  + mu * sum(g.T @ W @ g for g in first))
+        if c2:
+            K = K + c2 * mu * sum(g.T @ W @ g for g in second)
+        m = self.phi.T @ W @ self.phi * case.material.rho
+        M = sp.block_diag([c1 * m, c1 * m, c2 * m])
+        free = self._free(l)
+        if free.size == 0:
+            return None
+        K, M = sp.csr_matrix(K)[free][:, free], sp.csr_matrix(M)[free][:, free]
+        K.eliminate_zeros()
+        M.eliminate_zeros()
+        return Harmonic(l, K.tocsr(), M.tocsr(), Q[free], self._probe_rows(l)[:, free])
+
+    def _load(self, l: int) -> np.ndarray:
+        """Load amplitudes ``(3 n,)`` of the case's pressures for harmonic ``l``."""
+        case = self.case
+        n = self.tie.shape[1]
+        Q = np.zeros(N_COMP * n)
+        family = "cos" if case.body == RING else "sin"  # of U and W
+        c1 = _factors(case.body, l, case.length)[0]
+        for load in case.loads:
+            if load.mode is not None:
+                f = load.q * c1 if l == load.mode else 0.0
+            else:
+                f = load.q * interval_fourier(load.x3_intervals, l, family, case.body, case.length)
+            if f == 0.0:
+                continue
+            fb = FacetBasis(self.mesh, ElementQuad2(), facets=self._edge_facets(load.edge), intorder=INTORDER)
+            x1 = np.asarray(fb.global_coordinates())[0]
+            weight = x1 if case.body == RING else np.ones_like(x1)
+            for comp in (0, 1):  # traction -q n on the section edge, per unit of q psi_l
+                v = asm(_traction, fb, weight=weight, e1=float(comp == 0), e2=float(comp == 1))
+                Q[comp * n:(comp + 1) * n] += f * (self.tie.T @ v)
+        return Q
+
+    def _edge_facets(self, edge: str) -> np.ndarray:
+        sec, mesh = self.case.section, self.mesh
+        name = sec.edge(edge)
+        axis = sec.s if name[0] == "s" else sec.t
+        target = axis.span[0] if name.endswith("min") else axis.span[1]
+        facets = mesh.boundary_facets()
+        s, t = _section_params(sec, mesh.p[:, mesh.facets[:, facets].ravel()])
+        v = (s if name[0] == "s" else t).reshape(mesh.facets.shape[0], -1)
+        size = max(abs(a) for a in axis.span) or 1.0
+        return facets[np.all(np.abs(v - target) < 1e-8 * size, axis=0)]
+
+    def _free(self, l: int) -> np.ndarray:
+        """Free amplitude dofs of harmonic ``l``: supports, the axis of a ring, V of l = 0."""
+        case, sec = self.case, self.case.section
+        n = self.tie.shape[1]
+        fixed = np.zeros(N_COMP * n, bool)
+        reduced_nodes = lambda mask: np.unique(self.tie[np.flatnonzero(mask)].indices)
+        s, t = _section_params(sec, self.basis.doflocs)
+        for support in case.supports:
+            if support.edge == "all":
+                nodes = np.arange(n)
+            else:
+                name = sec.edge(support.edge)
+                axis = sec.s if name[0] == "s" else sec.t
+                target = axis.span[0] if name.endswith("min") else axis.span[1]
+                size = max(abs(a) for a in axis.span) or 1.0
+                nodes = reduced_nodes(np.abs((s if name[0] == "s" else t) - target) < 1e-8 * size)
+            for c in support.components:
+                fixed[(c - 1) * n + nodes] = True
+        if case.body == RING:
+            size = np.abs(self.basis.doflocs).max()
+            on_axis = reduced_nodes(np.abs(self.basis.doflocs[0]) < 1e-9 * size)
+            if on_axis.size and l > 0:
+                raise UnsupportedCase("harmonic model: harmonics l >= 1 of a section that touches the axis")
+            fixed[on_axis] = True  # l = 0: no radial displacement on the axis
+            if l == 0:
+                fixed[2 * n:] = True  # the cos family's l = 0 has no hoop displacement
+        return np.flatnonzero(~fixed)
+
+    def _probe_rows(self, l: int) -> np.ndarray:
+        """``(n_probes, 3 n)``: probe value per unit amplitude of harmonic ``l``."""
+        case = self.case
+        n = self.tie.shape[1]
+        rows = np.zeros((len(case.probes), N_COMP * n))
+        for k, p in enumerate(case.probes):
+            x1, x2, x3 = p.point
+            interp = (self.basis.probes(np.array([[x1], [x2]])) @ self.tie).toarray()[0]
+            comp = p.component[0] - 1
+            rows[k, comp * n:(comp + 1) * n] = interp * _psi(case, l, comp, x3)
+        return rows
+
+
+@LinearForm
+def _traction(v, w):
+    """Unit pressure's traction ``-n`` along ``(w.e1, w.e2)``, times ``w.weight`` (r for a ring)."""
+    return -(w.n[0] * w.e1 + w.n[1] * w.e2) * v * w.weight
+
+
+def _psi(case, l: int, comp: int, x3: float) -> float:
+    """Basis function along x3 of component ``comp`` (0-based) of harmonic ``l`` at ``x3``."""
+    if case.body == RING:
+        return math.sin(l * x3) if comp == 2 else math.cos(l * x3)
+    k = l * math.pi / case.length
+    return math.cos(k * x3) if comp == 2 else math.sin(k * x3)
+
+
+def _section_params(sec, x: np.ndarray):
+    """Parametric ``(s, t)`` of section points ``x``, shape ``(2, n)``."""
+    return section_params(sec, x[0], x[1])

@@ -1,0 +1,317 @@
+"""The truth of a case: probe histories converged in space, harmonics and time, each with an
+uncertainty, so that a run's *total* error can be measured (not only its difference from
+another solver at the same time step).
+
+Two ways to make one (:class:`reports.plan.TruthPlan`):
+
+``modal`` (linear, homogeneous along x3)
+    The reference's harmonic model integrated exactly in time (:mod:`reference_fem.modal`), so
+    the time error is zero. The spatial error is estimated from the ``refine`` ladder and the
+    truncation of the Fourier series from the ``harmonics`` ladder, each by the observed order
+    of its three finest levels (Roache's grid convergence index: ``1.25 |q_h - q_2h| /
+    (2^p - 1)``, ``p`` at most 2); the modes left out of the largest harmonics (mode
+    acceleration) add their measured share.
+``time-step halving`` (plastic, contact, cut-outs)
+    A reference FEM at three or more halvings of the time step on one mesh. Where the observed
+    order of the three finest is within 0.5 of Newmark's 2, Richardson's extrapolation
+    ``q_h + (q_h - q_2h) / 3`` is the truth and its uncertainty the change of that
+    extrapolation from the coarser pair of levels; else the finest level is the truth and its
+    uncertainty the difference of the two finest scaled by the observed order as above (with
+    orders below 1, common here, the plain difference would understate the error). Finer
+    meshes at the case's time step correct it to the finest (errors assumed additive), whose
+    own uncertainty is the ladder's GCI, or the difference of two meshes in full.
+
+Uncertainties are relative max-norms over the window, in the measure the errors use (the
+case's comparison window included). A probe the case lists under
+``references['singular_probes']`` (a peak on a re-entrant corner) has no converged truth.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import brentq
+
+from cases import get_case
+from smfem.output import jsonable
+
+from .cache import Run
+from .jobs import OK, Job
+from .metrics import common_grid, smoothed
+from .plan import MODAL, MODAL_TRUTH, REF2D, REF3D, TIME_TRUTH, TruthPlan, full, quick
+
+#: order of Newmark's average-acceleration method
+NEWMARK_ORDER = 2.0
+#: an observed order this close to NEWMARK_ORDER lets Richardson extrapolate
+ORDER_BAND = 0.5
+#: the parts an uncertainty is the sum of
+PARTS = ("time", "space", "harmonics", "modes")
+#: Roache's safety factor for a three-level grid convergence index
+GCI_SAFETY = 1.25
+
+
+@dataclass
+class Truth:
+    """Converged probe histories of one case.
+
+    Attributes
+    ----------
+    t : (n,) times, s
+    values : probe -> (n,) history
+    uncertainty : probe -> relative max-norm uncertainty; NaN: no converged truth (``notes``
+        says why)
+    parts : probe -> its parts (``time``, ``space``, ``harmonics``, ``modes``) and the
+        observed orders
+    levels : the runs it is made of (solver, settings, status, CPU time)
+    """
+
+    case: str
+    method: str
+    name: str
+    t: np.ndarray
+    values: dict
+    uncertainty: dict
+    parts: dict
+    notes: dict
+    levels: list
+    cpu_time_s: float
+    window: float = 0.0
+    params: dict = field(default_factory=dict)
+
+    def uncertainty_of(self, probes) -> float:
+        """The largest uncertainty over ``probes`` that have a converged truth (NaN if none)."""
+        values = [self.uncertainty[p] for p in probes if p in self.uncertainty and math.isfinite(self.uncertainty[p])]
+        return max(values) if values else math.nan
+
+    def converged(self, probe: str) -> bool:
+        return math.isfinite(self.uncertainty.get(probe, math.nan))
+
+    def summary(self) -> dict:
+        return {"case": self.case, "method": self.method, "name": self.name, "params": self.params,
+                "uncertainty": self.uncertainty, "parts": self.parts, "notes": self.notes,
+                "levels": self.levels, "cpu_time_s": self.cpu_time_s, "comparison_window_s": self.window,
+                "end_time_s": float(self.t[-1])}
+
+    def write(self, out: Path) -> None:
+        """``history.csv`` (as ``smfem run`` writes it) and ``summary.json``."""
+        out.mkdir(parents=True, exist_ok=True)
+        pd.DataFrame({"t": self.t, **self.values}).to_csv(out / "history.csv", index=False, float_format="%.12g")
+        (out / "summary.json").write_text(json.dumps(jsonable(self.summary()), indent=2))
+
+
+# -- which truth ----------------------------------------------------------------------------
+def modal_unsupported(case) -> str | None:
+    """Why ``case`` has no modal truth (None if it has one)."""
+    from reference_fem.harmonic import unsupported_reason
+
+    return unsupported_reason(case)
+
+
+def reference_solver(case) -> str:
+    """The reference that can run ``case``: 2D where the scene has a 2D form, else 3D."""
+    from cases.params import UnsupportedCase
+    from reference_fem.mesh import build_mesh
+
+    try:
+        build_mesh(replace(case, params={**case.params, "dim": 2, "refine": 1}))
+    except UnsupportedCase:
+        return REF3D
+    return REF2D
+
+
+def plan_for(name: str, base: dict, settings: str = "quick") -> TruthPlan:
+    """The truth plan of case ``name`` with overrides ``base``: the study's own where it fits
+    the case as set up; else modal where the case is linear and homogeneous along x3 (the
+    unnotched elastic strip), else time-step halving on a reference that can run it (a
+    plastic variant cannot be modal)."""
+    full_ = settings == "full"
+    studies = {s.case: s for s in (full() if full_ else quick())}
+    plan = studies[name].truth
+    case = get_case(name, base)
+    modal_ok = not modal_unsupported(case)
+    if plan.method == TIME_TRUTH and modal_ok:
+        h = case.harmonics
+        plan = TruthPlan(MODAL_TRUTH, refine=(2, 4, 8) if full_ else (1, 2, 4),
+                         harmonics=() if case.axisymmetric else (h, 2 * h, 4 * h) if not full_ else (2 * h, 4 * h, 8 * h))
+    elif plan.method == MODAL_TRUTH and not modal_ok:
+        plan = TruthPlan(TIME_TRUTH, refine=(2, 3) if full_ else (1, 2), dt_divisors=(1, 2, 4, 8) if full_ else (1, 2, 4))
+    if plan.method == TIME_TRUTH:
+        plan = replace(plan, solver=reference_solver(case))
+    return plan
+
+
+def jobs(name: str, plan: TruthPlan, base: dict) -> dict[tuple, Job]:
+    """The runs a truth is made of, by role: ``('space', refine)``, ``('harmonics', n)``,
+    ``('dt', divisor)``."""
+    case = get_case(name, base)
+    dt = case.dt
+    out = {}
+    if plan.method == MODAL_TRUTH:
+        n = plan.harmonics[-1] if plan.harmonics else case.harmonics
+        sample = {"dt": dt / plan.output_divisor}
+        for r in plan.refine:
+            out["space", r] = Job.make(name, MODAL, {**base, **sample, "refine": r, "harmonics": n})
+        for h in plan.harmonics:
+            out["harmonics", h] = Job.make(name, MODAL, {**base, **sample, "refine": plan.refine[-1], "harmonics": h})
+        return out
+    coarse = plan.refine[0]
+    for d in plan.dt_divisors:
+        out["dt", d] = Job.make(name, plan.solver, {**base, "refine": coarse, **({"dt": dt / d} if d != 1 else {})})
+    for r in plan.refine[1:]:
+        out["space", r] = Job.make(name, plan.solver, {**base, "refine": r})
+    return out
+
+
+# -- sequences of levels --------------------------------------------------------------------
+def _rel(d: np.ndarray, scale: np.ndarray, grid: np.ndarray, window: float) -> float:
+    """``max |d| / max |scale|``, both seen through the comparison window."""
+    top = np.abs(smoothed(scale, grid, window)).max()
+    return float(np.abs(smoothed(d, grid, window)).max() / top) if top else math.nan
+
+
+def _on(run: Run, probe: str, grid: np.ndarray) -> np.ndarray:
+    h = run.history
+    return np.interp(grid, h["t"].to_numpy(), h[probe].to_numpy())
+
+
+def _times(run: Run, end: float) -> np.ndarray:
+    t = run.history["t"].to_numpy()
+    return t[t <= end * (1 + 1e-12)]
+
+
+def order_of(h, d_coarse: float, d_fine: float) -> float:
+    """Observed order from three levels of mesh-size-like values ``h`` (coarse to fine, any
+    ratios) and the differences of their consecutive results; NaN where the differences do
+    not shrink or no order in (0.05, 12) fits."""
+    h1, h2, h3 = (float(x) for x in h)
+    if not (d_coarse > 0 and d_fine > 0) or d_fine >= d_coarse * (1 - 1e-12):
+        return math.nan if not (d_coarse > 0 and d_fine > 0) else -1.0
+    f = lambda p: (h1**p - h2**p) / (h2**p - h3**p) - d_coarse / d_fine
+    lo, hi = 0.05, 12.0
+    if f(lo) * f(hi) > 0:
+        return math.nan
+    return brentq(f, lo, hi)
+
+
+def gci(d_coarse: float, d_fine: float, h=(4.0, 2.0, 1.0)) -> tuple[float, float]:
+    """Uncertainty of the finest of three levels ``h`` (coarse to fine) and the observed order:
+    ``1.25 d_fine / ((h2 / h3)^p - 1)``, ``p`` capped at 2; the plain difference ``d_fine``
+    where the differences do not shrink or only two levels exist (``d_coarse`` NaN)."""
+    p = order_of(h, d_coarse, d_fine) if math.isfinite(d_coarse) else math.nan
+    if not math.isfinite(p) or p <= 0:
+        return d_fine, p
+    return GCI_SAFETY * d_fine / ((h[1] / h[2]) ** min(p, NEWMARK_ORDER) - 1), p
+
+
+def _ladder(runs: list[Run], h, probe: str, grid: np.ndarray, window: float,
+            scale: np.ndarray | None = None) -> tuple[float, float]:
+    """GCI uncertainty and observed order of a ladder of runs (coarse to fine, mesh-size-like
+    values ``h``) on one grid, relative to ``scale`` (default: the finest run)."""
+    q = [_on(r, probe, grid) for r in runs[-3:]]
+    if len(q) < 2:
+        return 0.0, math.nan
+    scale = q[-1] if scale is None else scale
+    d_fine = _rel(q[-1] - q[-2], scale, grid, window)
+    d_coarse = _rel(q[-2] - q[-3], scale, grid, window) if len(q) == 3 else math.nan
+    return gci(d_coarse, d_fine, tuple(h[-3:]) if len(q) == 3 else (4.0, 2.0, 1.0))
+
+
+def _not_ok(runs) -> list[str]:
+    return [f"{r.job.describe()}: {r.status}" for r in runs if r.status != OK]
+
+
+# -- assembling -----------------------------------------------------------------------------
+def assemble(name: str, plan: TruthPlan, base: dict, runs: dict[tuple, Run]) -> Truth | None:
+    """The truth from its runs (:func:`jobs`), or None if a run it needs has no history."""
+    if any(not r.usable for r in runs.values()):
+        return None
+    case = get_case(name, base)
+    window = case.references.get("comparison_window_s", 0.0)
+    levels = [{"role": f"{k[0]} {k[1]}", "run": r.job.describe(), "status": r.status,
+               "cpu_time_s": r.summary["cpu_time_s"]} for k, r in runs.items()]
+    unique = {r.path: r for r in runs.values()}.values()  # one run may fill two roles
+    cpu = float(sum(r.summary["cpu_time_s"] for r in unique))
+    make = _modal if plan.method == MODAL_TRUTH else _time_halving
+    t, values, parts, label = make(case, plan, runs, window)
+    uncertainty, notes = {}, {}
+    singular = case.references.get("singular_probes", {})
+    for probe in case.probe_names:
+        u = sum(parts[probe].get(k, 0.0) for k in PARTS)
+        if probe in singular:
+            uncertainty[probe], notes[probe] = math.nan, f"no converged truth: {singular[probe]}"
+        elif not math.isfinite(u):
+            uncertainty[probe], notes[probe] = math.nan, "no converged truth: the levels do not converge"
+        else:
+            uncertainty[probe] = u
+    stopped = _not_ok(unique)
+    if stopped:
+        label += f"; covers t <= {t[-1]:.4g} s ({'; '.join(stopped)})"
+    return Truth(case.name, plan.method, label, t, values, uncertainty, parts, notes, levels, cpu, window,
+                 params=dict(case.params))
+
+
+def _modal(case, plan, runs, window):
+    space = [runs["space", r] for r in plan.refine]
+    harm = [runs["harmonics", h] for h in plan.harmonics]
+    finest = space[-1]
+    grid = finest.history["t"].to_numpy()
+    values, parts = {}, {}
+    truncation = finest.summary["info"].get("truncation", {})
+    for probe in case.probe_names:
+        values[probe] = finest.history[probe].to_numpy()
+        u_s, p_s = _ladder(space, [1 / r for r in plan.refine], probe, grid, window)
+        part = {"space": u_s, "order_space": p_s, "modes": float(truncation.get(probe, 0.0))}
+        if harm:
+            part["harmonics"], part["order_harmonics"] = _ladder(harm, [1 / n for n in plan.harmonics], probe, grid, window)
+        if math.isfinite(p_s) and p_s <= 0:
+            part["space"] = math.nan  # finer meshes move the probe more: not converging
+        parts[probe] = part
+    p = finest.summary["params"]
+    label = (f"{MODAL}: harmonic model r{p['refine']}" + (f" H{p['harmonics']}" if harm else "")
+             + " exact in time (modal)")
+    return grid, values, parts, label
+
+
+def _time_halving(case, plan, runs, window):
+    coarse, fine = plan.refine[0], plan.refine[-1]
+    ladder = [runs["dt", d] for d in plan.dt_divisors]
+    meshes = [ladder[0]] + [runs["space", r] for r in plan.refine[1:]]  # at the case's dt, coarse to fine
+    if any(b != 2 * a for a, b in zip(plan.dt_divisors, plan.dt_divisors[1:])):
+        raise ValueError("the dt ladder must halve the time step at every level")
+    end = min(r.history["t"].iloc[-1] for r in runs.values())
+    qa, qb, qc = ladder[-3:]
+    grid_a, grid_b, grid_0 = _times(qa, end), _times(qb, end), _times(ladder[0], end)
+    values, parts = {}, {}
+    for probe in case.probe_names:
+        a_, b_, c_ = (_on(r, probe, grid_a) for r in (qa, qb, qc))
+        d1, d2 = _rel(b_ - a_, c_, grid_a, window), _rel(c_ - b_, c_, grid_a, window)
+        p = order_of((4.0, 2.0, 1.0), d1, d2)
+        b, c = _on(qb, probe, grid_b), _on(qc, probe, grid_b)
+        if math.isfinite(p) and abs(p - NEWMARK_ORDER) <= ORDER_BAND:
+            factor = 1.0 / (2**NEWMARK_ORDER - 1)
+            T = c + (c - b) * factor
+            T_coarse = b_ + (b_ - a_) * factor
+            u_t = _rel(np.interp(grid_a, grid_b, T) - T_coarse, T_coarse, grid_a, window)
+            how = "Richardson"
+        else:  # the difference of the two finest, scaled by the observed order (GCI)
+            T = c
+            d_fine = _rel(c - b, c, grid_b, window)
+            u_t = GCI_SAFETY * d_fine / (2 ** min(p, NEWMARK_ORDER) - 1) if math.isfinite(p) and p > 0 else d_fine
+            how = "finest"
+        # the finest mesh at the case's dt: its difference corrects the ladder's mesh
+        delta = _on(meshes[-1], probe, grid_0) - _on(ladder[0], probe, grid_0)
+        T = T + np.interp(grid_b, grid_0, delta)
+        u_s, p_s = _ladder(meshes, [1 / r for r in plan.refine], probe, grid_0, window,
+                           scale=np.interp(grid_0, grid_b, T))
+        values[probe] = T
+        parts[probe] = {"time": u_t, "order_time": p, "time_estimate": how, "space": u_s, "order_space": p_s}
+    p_ = ladder[0].summary["params"]
+    label = (f"{plan.solver} r{coarse} at dt/{', dt/'.join(map(str, plan.dt_divisors))} (dt = {p_['dt']:g} s), "
+             f"Richardson where the order is near 2, corrected to r{fine} at dt"
+             + (f" (meshes r{', r'.join(map(str, plan.refine))})" if len(plan.refine) > 2 else ""))
+    return grid_b, values, parts, label
