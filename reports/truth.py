@@ -130,19 +130,24 @@ def plan_for(name: str, base: dict, settings: str = "quick") -> TruthPlan:
     unnotched elastic strip), else time-step halving on a reference that can run it (a
     plastic variant cannot be modal)."""
     full_ = settings == "full"
-    studies = {s.case: s for s in (full() if full_ else quick())}
-    plan = studies[name].truth
+    plan = {s.case: s for s in (full() if full_ else quick())}[name].truth
     case = get_case(name, base)
     modal_ok = not modal_unsupported(case)
     if plan.method == TIME_TRUTH and modal_ok:
-        h = case.harmonics
-        plan = TruthPlan(MODAL_TRUTH, refine=(2, 4, 8) if full_ else (1, 2, 4),
-                         harmonics=() if case.axisymmetric else (h, 2 * h, 4 * h) if not full_ else (2 * h, 4 * h, 8 * h))
+        plan = _modal_plan(case, full_)
     elif plan.method == MODAL_TRUTH and not modal_ok:
         plan = TruthPlan(TIME_TRUTH, refine=(2, 3) if full_ else (1, 2), dt_divisors=(1, 2, 4, 8) if full_ else (1, 2, 4))
     if plan.method == TIME_TRUTH:
         plan = replace(plan, solver=reference_solver(case))
     return plan
+
+
+def _modal_plan(case, full_: bool) -> TruthPlan:
+    """Meshes refine 1, 2, 4 (full: 2, 4, 8) and 1, 2, 4 (full: 2, 4, 8) times the case's
+    harmonics (none for an axisymmetric case)."""
+    scale = (2, 4, 8) if full_ else (1, 2, 4)
+    return TruthPlan(MODAL_TRUTH, refine=scale,
+                     harmonics=() if case.axisymmetric else tuple(k * case.harmonics for k in scale))
 
 
 def jobs(name: str, plan: TruthPlan, base: dict) -> dict[tuple, Job]:
@@ -186,16 +191,16 @@ def _times(run: Run, end: float) -> np.ndarray:
 
 def order_of(h, d_coarse: float, d_fine: float) -> float:
     """Observed order from three levels of mesh-size-like values ``h`` (coarse to fine, any
-    ratios) and the differences of their consecutive results; NaN where the differences do
-    not shrink or no order in (0.05, 12) fits."""
+    ratios) and the differences of their consecutive results: negative where the differences
+    grow, NaN where one is zero or no order in (0.05, 12) fits shrinking ones."""
     h1, h2, h3 = (float(x) for x in h)
-    if not (d_coarse > 0 and d_fine > 0) or d_fine >= d_coarse * (1 - 1e-12):
-        return math.nan if not (d_coarse > 0 and d_fine > 0) else -1.0
+    if not (d_coarse > 0 and d_fine > 0):
+        return math.nan
+    if math.isclose(h1 / h2, h2 / h3, rel_tol=1e-9) or d_fine >= d_coarse:
+        return math.log(d_coarse / d_fine) / math.log(h2 / h3)  # exact for a constant ratio
     f = lambda p: (h1**p - h2**p) / (h2**p - h3**p) - d_coarse / d_fine
     lo, hi = 0.05, 12.0
-    if f(lo) * f(hi) > 0:
-        return math.nan
-    return brentq(f, lo, hi)
+    return brentq(f, lo, hi) if f(lo) * f(hi) < 0 else math.nan
 
 
 def gci(d_coarse: float, d_fine: float, h=(4.0, 2.0, 1.0)) -> tuple[float, float]:
