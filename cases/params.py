@@ -148,3 +148,25 @@ def validate(specs: dict[str, Spec], defaults: dict, overrides: dict, case_name:
             f"{MAX_STEPS} time steps"
         )
     return params
+
+
+def out_of_range(spec: Spec) -> list[str]:
+    """Values (as ``--set`` text) that ``spec`` must refuse: past each bound, the open bounds
+    themselves, the non-finite floats, wrong types. The bad-input tests and the report's
+    stability section sweep them over every key."""
+    if spec.type is bool:
+        return ["3", "maybe", "1.0"]
+    if spec.choices is not None:
+        return [repr(max(spec.choices) + 1), "x"]
+    bad = ["nan", "inf", "-inf", "'x'", "(1, 2)"]
+    if spec.lo is not None:
+        bad.append(repr(spec.lo - max(1.0, abs(spec.lo))))
+        if spec.open_lo:
+            bad.append(repr(spec.lo))
+    if spec.hi is not None:
+        bad.append(repr(spec.hi + max(1.0, abs(spec.hi))))
+        if spec.open_hi:
+            bad.append(repr(spec.hi))
+    if spec.type is int:
+        bad += ["1.5", "true"]
+    return bad

@@ -13,6 +13,6 @@ Imports nothing from :mod:`smfem`; sees a scene only through :mod:`cases`.
 """
 
 from .model import Model
-from .solver import ReferenceResult, solve, static
+from .solver import solve, static
 
-__all__ = ["Model", "ReferenceResult", "solve", "static"]
+__all__ = ["Model", "solve", "static"]

@@ -26,12 +26,12 @@ import numpy as np
 import scipy.linalg as la
 import scipy.sparse.linalg as sla
 
+from cases.result import RunResult
 from cases.timeint import newmark_constants
 
 from .harmonic import HarmonicModel
 from .linalg import factorize
 from .newmark import march
-from .solver import ReferenceResult
 
 #: the largest harmonic decomposed whole (dense eigenproblem)
 MAX_DENSE = 3000
@@ -150,7 +150,7 @@ def newmark_histories(model, dt: float, n_steps: int) -> dict:
 def solve(case, progress=None):
     """The case's probe histories at ``t = 0, dt, ..., t_end``, exact in time.
 
-    Returns a :class:`~reference_fem.solver.ReferenceResult` with no time steps
+    Returns a :class:`cases.result.RunResult` with no time steps
     (``iterations`` empty: ``dt`` only sets where the histories are sampled) and ``info``:
     ``'method'``, ``'harmonics_used'``, ``'modes'`` (modes summed over all harmonics) and
     ``'truncation'`` (per probe, see :class:`ModalResult`).
@@ -166,7 +166,7 @@ def solve(case, progress=None):
     result = histories(model, t)
     if progress is not None:
         progress(case.n_steps, case.n_steps)
-    return ReferenceResult(
+    return RunResult(
         t=t, history=result.history, n_dof=model.n_dof, iterations=[], converged=True, message="",
         cpu_time_s=time.process_time() - cpu0, mesh=None,
         info={"method": "modal superposition per harmonic (exact in time)",

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 from typing import Callable
 
 import meshio
@@ -12,6 +11,7 @@ from skfem import ElementHex2
 from skfem.io.meshio import HEX_MAPPING
 
 from cases.params import UnsupportedCase
+from cases.result import RunResult
 from cases.timeint import newmark_constants
 
 from .equilibrium import Elastic, NotConverged, Plastic
@@ -24,46 +24,6 @@ from .zones import snapshot as zone_snapshot
 from .wall import ContactLog, WallSystem, case_wall_rows
 
 
-@dataclass
-class ReferenceResult:
-    """History and diagnostics of one reference run.
-
-    Attributes
-    ----------
-    t : (n_steps + 1,) times (s), starting at 0
-    history : probe name -> (n_steps + 1,) values, in the order of ``case.probes``; a run that
-        stopped early has only the converged steps
-    n_dof : number of free dofs
-    iterations : Newton iterations per step (1 for a linear step; with a wall, the active-set
-        iterations)
-    converged : False when a step did not converge (the run stopped there)
-    message : why the run stopped early, '' otherwise
-    cpu_time_s : process CPU time (s) of the solve: assembly, factorization and time stepping;
-        mesh generation excluded
-    mesh : meshio.Mesh at the final time (cartesian points; point data 'displacement', 3
-        components; cell data 'peps', the element mean of the equivalent plastic strain, when
-        plastic)
-    info : 'dim', 'representation', 'element', 'n_elements', 'intorder', 'counts' (elements per
-        mesh direction), 'factorizations' (of K + a0 M and of tangents), 'cpu_mesh_s';
-        with a wall also 'contact_nodes', 'energy_before' and 'energy_after' (kinetic + strain,
-        J, at t = 0 and at the last step), 'contact_window' (first and last time with a wall
-        force, s, or None) and 'max_penetration' (m, over all nodes and steps; 0 if none)
-    snapshots : plastic strain at the case's plastic-zone times (2D plastic runs), as
-        :mod:`reference_fem.zones` makes them
-    """
-
-    t: np.ndarray
-    history: dict
-    n_dof: int
-    iterations: list
-    converged: bool
-    message: str
-    cpu_time_s: float
-    mesh: meshio.Mesh | None
-    info: dict = field(default_factory=dict)
-    snapshots: list = field(default_factory=list)
-
-
 def _system(model: Model, c: float):
     if model.case.wall is not None:
         return WallSystem(model, c, case_wall_rows(model))
@@ -71,7 +31,7 @@ def _system(model: Model, c: float):
     return Plastic(model, c, model.case.params["tol"]) if mat.plastic else Elastic(model, c)
 
 
-def solve(case, progress: Callable[[int, int], None] | None = None) -> ReferenceResult:
+def solve(case, progress: Callable[[int, int], None] | None = None) -> RunResult:
     """Transient response of ``case`` over its time window, Newmark (alpha 0.25, delta 0.5).
 
     Parameters
@@ -81,7 +41,17 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> Reference
 
     Returns
     -------
-    ReferenceResult
+    cases.result.RunResult
+        ``iterations``: Newton iterations per step (1 for a linear step; with a wall, the
+        active-set iterations); ``cpu_time_s``: assembly, factorization and time stepping, mesh
+        generation excluded; ``mesh``: the final state (cartesian points; point data
+        'displacement'; cell data 'peps', the element mean, when plastic); ``info``: 'dim',
+        'representation', 'element', 'n_elements', 'intorder', 'counts' (elements per mesh
+        direction), 'factorizations' (of K + a0 M and of tangents), 'cpu_mesh_s'; with a wall
+        also 'contact_nodes', 'energy_before' and 'energy_after' (kinetic + strain, J, at t = 0
+        and at the last step), 'contact_window' (first and last time with a wall force, s, or
+        None) and 'max_penetration' (m, over all nodes and steps; 0 if none); ``snapshots``: 2D
+        plastic runs only, as :mod:`reference_fem.zones` makes them
 
     Raises
     ------
@@ -126,7 +96,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> Reference
         message = f"step {len(times)} (t = {len(times) * dt:.6g} s) did not converge: {err}"
     cpu = time.process_time() - cpu1
     history = {name: np.array([r[k] for r in rows]) for k, name in enumerate(probes.names)}
-    return ReferenceResult(
+    return RunResult(
         t=np.array(times), history=history, n_dof=int(free.size), iterations=iterations,
         converged=converged, message=message, cpu_time_s=cpu, snapshots=snapshots,
         mesh=output_mesh(model, u_full, system),
@@ -204,4 +174,4 @@ def _info(model: Model, system, cpu_mesh: float) -> dict:
     }
 
 
-__all__ = ["ReferenceResult", "solve", "static"]
+__all__ = ["solve", "static"]

@@ -1,4 +1,4 @@
-"""Plastic-zone snapshots of a 2D reference run, in the format of ``smfem.zones``.
+"""Plastic-zone snapshots of a 2D reference run, in the format of ``runs.zones``.
 
 ``{"t", "poly": (n, 4, 2) corner points, "peps": (n,) element means}`` in the mesh plane, which
 is the plane SMFEM draws in (ring: x-y; axisymmetric: r-z; prism: span-height).

@@ -26,7 +26,7 @@ from .jobs import FAILED, Job, Outcome
 from .plan import MODAL, SMFEM
 
 #: packages whose source decides a solver's results
-SOURCES = {SMFEM: ("smfem", "cases"), "reference": ("reference_fem", "cases")}
+SOURCES = {SMFEM: ("smfem", "cases", "runs"), "reference": ("reference_fem", "cases", "runs")}
 
 
 @functools.cache

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cases import UnsupportedCase, get_case
+from runs.files import write_run
+from runs.registry import family, solve
 
 from .plan import MODAL, REF3D, SMFEM
 
@@ -57,22 +59,6 @@ class Outcome:
     files: dict | None = None
 
 
-def _solve(job: Job, case):
-    if job.solver == SMFEM:
-        from smfem.solver import solve
-
-        return solve(case, with_fields=job.fields)
-    if job.solver == MODAL:
-        from reference_fem.modal import solve
-
-        return solve(case)
-    from reference_fem import solve
-
-    result = solve(case)
-    result.mesh = None  # the report shows SMFEM's synthesized field; a 3-D reference mesh is large
-    return result
-
-
 def execute(job: Job) -> Outcome:
     """Run ``job`` as ``smfem run`` would and return its files.
 
@@ -80,12 +66,10 @@ def execute(job: Job) -> Outcome:
     ``not available``; any other exception gives ``failed`` with the traceback's last line, so
     that one broken run does not lose a long study.
     """
-    from smfem.output import write_run
-
     case = job.build()
     wall0 = time.perf_counter()
     try:
-        result = _solve(job, case)
+        result = solve(job.solver, case, fields=job.fields)
     except UnsupportedCase as exc:
         return Outcome(NOT_AVAILABLE, str(exc))
     except Exception as exc:  # noqa: BLE001 - reported per run, see the docstring
@@ -94,6 +78,6 @@ def execute(job: Job) -> Outcome:
     wall = time.perf_counter() - wall0
     with tempfile.TemporaryDirectory(prefix="smfem-job-") as tmp:
         out = Path(tmp)
-        write_run(out, case, {SMFEM: "smfem", MODAL: MODAL}.get(job.solver, "reference"), result, wall)
+        write_run(out, case, family(job.solver), result, wall)
         files = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
     return Outcome(OK if result.converged else NOT_CONVERGED, result.message, files)

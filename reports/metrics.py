@@ -6,57 +6,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import trapezoid
 from scipy.optimize import brentq
 
-
-def moving_average(x: np.ndarray, width: int) -> np.ndarray:
-    """Centred moving average over ``width`` samples, the ends held (no shrink at the edges)."""
-    if width < 2:
-        return np.asarray(x, float)
-    padded = np.concatenate([np.full(width, x[0]), x, np.full(width, x[-1])])
-    return np.convolve(padded, np.ones(width) / width, mode="same")[width:-width]
-
-
-def common_grid(t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarray):
-    """Both histories on the coarser of the two time grids, over their common window.
-
-    A time-stepping run is known at its own steps only: on nested grids (dt halvings) this
-    compares at the coarser run's steps exactly, without interpolating between them.
-    Returns ``(times, a, b)``.
-    """
-    end = min(t[-1], t_ref[-1]) * (1 + 1e-12)
-    coarse_is_run = len(t) > 1 and len(t_ref) > 1 and np.median(np.diff(t)) > np.median(np.diff(t_ref)) * (1 + 1e-9)
-    grid = t if coarse_is_run else t_ref
-    grid = grid[grid <= end]
-    return grid, np.interp(grid, t, a), np.interp(grid, t_ref, b)
-
-
-def smoothed(x: np.ndarray, grid: np.ndarray, window: float) -> np.ndarray:
-    """``x`` seen through a moving average ``window`` s long (unchanged when ``window`` is 0)."""
-    if window <= 0 or len(grid) < 2:
-        return x
-    return moving_average(x, int(round(window / np.median(np.diff(grid)))))
-
-
-def history_errors(t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarray,
-                   window: float = 0.0) -> tuple[float, float]:
-    """Relative max-norm and L2 errors of history ``a`` against ``b`` over their common window.
-
-    ``max|a - b| / max|b|`` and ``sqrt(int (a - b)^2 dt / int b^2 dt)``, on the coarser of
-    the two time grids (:func:`common_grid`), so runs with another ``dt`` compare too.
-    ``window`` (s): both histories are first seen through a moving average that long, for
-    scenes whose shorter features no model converges on (the case's
-    ``references['comparison_window_s']``, e.g. the rod's 2R/c). NaN when the reference is
-    identically zero or the windows do not overlap.
-    """
-    grid, a, b = common_grid(t, a, t_ref, b)
-    if len(grid) < 2 or not np.any(b):
-        return math.nan, math.nan
-    a, b = smoothed(a, grid, window), smoothed(b, grid, window)
-    d = a - b
-    l2 = math.sqrt(trapezoid(d * d, grid) / trapezoid(b * b, grid))
-    return float(np.abs(d).max() / np.abs(b).max()), l2
+from runs.errors import common_grid, history_errors, moving_average, smoothed  # noqa: F401 - used here and re-exported
 
 
 def extrema_near(t: np.ndarray, a: np.ndarray, points, kinds) -> list[tuple[float, float]]:

@@ -12,12 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from cases import ParameterError, get_case
+from runs.registry import MODAL, REF2D, REF3D, SMFEM
 
-SMFEM, REF2D, REF3D = "smfem", "reference-2d", "reference-3d"
+#: the solvers a study has series of (the modal solution, ``MODAL``, makes truths only)
 SOLVERS = (SMFEM, REF2D, REF3D)
-#: the reference's harmonic model integrated exactly in time (:mod:`reference_fem.modal`):
-#: a maker of truths, not a series of its own
-MODAL = "reference-modal"
 #: the ``--set`` keys that make a level
 RESOLUTION_KEYS = ("refine", "harmonics", "dt")
 #: time steps of the quick study's 3-D series, as divisors of the case's: twice, once and half

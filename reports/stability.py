@@ -1,4 +1,4 @@
-"""The report's stability section (issue 7): the figures of :mod:`smfem.stability_study`.
+"""The report's stability section (issue 7): the figures of :mod:`reports.stability_study`.
 
 The table takes about a minute, so it is cached beside the runs, by the code version of both
 solvers; a tiny (test) study leaves the section out.
@@ -18,7 +18,7 @@ WITH_STABILITY = ("quick", "full")
 def stability_rows(cache_dir) -> pd.DataFrame:
     path = cache_dir / f"stability-{code_version('smfem')}-{code_version('reference')}.csv"
     if not path.exists():
-        from smfem.stability_study import stability_table
+        from .stability_study import stability_table
 
         cache_dir.mkdir(parents=True, exist_ok=True)
         pd.DataFrame(stability_table()).to_csv(path, index=False)
@@ -32,7 +32,7 @@ def stability(ctx) -> list[Section]:
     rows.to_csv(ctx.out / "tables" / "stability.csv", index=False)
     failed = rows[~rows.passed]
     return [Section("stability", "Stability on stiff and extreme settings", [
-        p("Each row is one figure of smfem/stability_study.py, with its acceptance limit; tests/test_stability.py "
+        p("Each row is one figure of reports/stability_study.py, with its acceptance limit; tests/test_stability.py "
           "and tests/test_bad_input.py assert the same figures."),
         items([
             "unconditional stability: linear free vibration, dt at 1, 10 and 100 times the explicit limit "

@@ -38,7 +38,7 @@ import pandas as pd
 from scipy.optimize import brentq
 
 from cases import get_case
-from smfem.output import jsonable
+from runs.files import jsonable
 
 from .cache import Run
 from .jobs import OK, Job

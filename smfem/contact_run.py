@@ -11,12 +11,13 @@ import time
 
 import numpy as np
 
+from cases.result import RunResult
+
 from .contact import ContactError, ContactLayer, ContactNewmark
 from .fields import field_mesh
 from .fourier import Mode
 from .model import Model, ModelError
 from .probes import ProbeSet
-from .result import RunResult
 
 #: relative energy gain over a run without loads beyond which the result is rejected
 ENERGY_GAIN_LIMIT = 0.01

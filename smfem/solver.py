@@ -17,12 +17,13 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
+from cases.result import RunResult
+
 from .fields import field_mesh
 from .iterative import BlockIterative, NotConverged
 from .model import Model, ModelError
 from .newmark import LinearNewmark
 from .probes import PlasticStrainProbes, ProbeSet
-from .result import RunResult
 from .zones import smfem_snapshot
 
 #: the largest coupled system factorized directly (nonzeros of K + a0 M)

@@ -1,10 +1,5 @@
-"""Plastic-zone snapshots: cells in the plotting plane and their equivalent plastic strain.
-
-A snapshot is ``{"t": time, "poly": (n, 4, 2) cell corners, "peps": (n,) cell values}`` in
-the plane both solvers draw in: the x-y plane of a ring, the (r, z) half-plane of an
-axisymmetric ring, the (span, height) plane of a prism. :func:`smfem.plots.plastic_zones`
-draws any solver's snapshots the same way.
-"""
+"""Plastic-zone snapshots of an SMFEM run: cells in the plotting plane and their equivalent
+plastic strain, ``{"t", "poly": (n, 4, 2), "peps": (n,)}`` (the format of :mod:`runs.zones`)."""
 
 from __future__ import annotations
 
@@ -39,24 +34,3 @@ def smfem_snapshot(t: float, model, case, peps: np.ndarray) -> dict:
         poly = np.stack([np.stack([A, z0], -1), np.stack([B, z0], -1), np.stack([B, z1], -1),
                          np.stack([A, z1], -1)], axis=2)
     return {"t": t, "poly": poly.reshape(-1, 4, 2), "peps": value.ravel()}
-
-
-def plastic_area(snapshot: dict, threshold: float = 1e-3) -> float:
-    """Area of the cells whose peps reaches ``threshold`` (plotting-plane units squared)."""
-    poly = snapshot["poly"][snapshot["peps"] >= threshold]
-    x, y = poly[..., 0], poly[..., 1]
-    return float(0.5 * np.abs((x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y).sum(axis=1)).sum())
-
-
-def save(snapshots: list[dict], path) -> None:
-    """Snapshots as one ``.npz`` (``t``, and ``poly_k``/``peps_k`` per snapshot k)."""
-    arrays = {"t": np.array([s["t"] for s in snapshots])}
-    for k, s in enumerate(snapshots):
-        arrays[f"poly_{k}"], arrays[f"peps_{k}"] = s["poly"], s["peps"]
-    np.savez_compressed(path, **arrays)
-
-
-def load(path) -> list[dict]:
-    """Snapshots written by :func:`save`."""
-    with np.load(path) as z:
-        return [{"t": float(t), "poly": z[f"poly_{k}"], "peps": z[f"peps_{k}"]} for k, t in enumerate(z["t"])]

@@ -18,9 +18,27 @@ from hypothesis.control import currently_in_test_context
 
 from cases import CASES, ParameterError, get_case, parse_sets
 from cases.params import MAX_STEPS
-from smfem import cli
-from smfem.cli import main
-from smfem.stability_study import bad_input, cli_outcome
+from cases.params import out_of_range
+from cli import main, run as run_command
+from reports.stability_study import bad_input
+
+
+def cli_outcome(args: list[str]) -> dict:
+    """Run the command line with ``--out`` in a scratch directory: exit status, stderr, whether
+    anything was written, and the history table if one was."""
+    import contextlib
+    import io
+    import tempfile
+
+    import pandas as pd
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "out"
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            code = main(args + ["--out", str(out)])
+        history = pd.read_csv(out / "history.csv") if (out / "history.csv").exists() else None
+        return {"code": code, "stderr": err.getvalue().strip(), "written": out.exists(), "history": history}
 
 
 def run_cli(args, capsys) -> tuple[int, str]:
@@ -41,12 +59,23 @@ def test_every_key_out_of_range_exits_2_naming_the_key(name, solver):
     """Every key of every case, every kind of bad value (past each bound, the open bounds, nan,
     inf, -inf, wrong types): exit 2, one line naming the key and its allowed range, nothing
     written."""
-    rows = bad_input((solver,), (name,))
-    assert len(rows) > 5 * len(CASES[name].SPECS)
-    for r in rows:
-        assert r["code"] == 2, r
-        assert_one_clear_line(r["message"], r["set"].partition("=")[0])
-        assert r["names_range"] and not r["written"], r
+    count = 0
+    for key, spec in CASES[name].SPECS.items():
+        for text in out_of_range(spec):
+            o = cli_outcome(["run", name, "--solver", solver, "--set", f"{key}={text}"])
+            assert o["code"] == 2, (key, text, o)
+            assert_one_clear_line(o["stderr"], key)
+            assert "out of range" not in o["stderr"] or spec.describe() in o["stderr"], o
+            assert not o["written"], (key, text)
+            count += 1
+    assert count > 5 * len(CASES[name].SPECS)
+
+
+def test_the_reports_bad_input_sweep_refuses_every_value():
+    rows = bad_input()
+    assert len(rows) > 100
+    assert all(r["refused"] and r["lines"] == 1 and r["names_key"] and r["names_range"] for r in rows), \
+        [r for r in rows if not (r["refused"] and r["names_key"] and r["names_range"])][:3]
 
 
 @pytest.mark.parametrize(
@@ -84,7 +113,7 @@ def test_unwritable_out_exits_2_before_any_work(tmp_path, capsys, monkeypatch, w
     blocker = tmp_path / "file"
     blocker.write_text("")
     out = {"under a file": blocker / "sub" / "deeper", "is a file": blocker, "in /proc": Path("/proc/smfem-out")}[where]
-    monkeypatch.setattr(cli, "solver_function", lambda name: pytest.fail("the solver ran"))
+    monkeypatch.setattr(run_command, "solve", lambda *a, **k: pytest.fail("the solver ran"))
     code, err = run_cli(["run", "dome", "--solver", solver, "--out", str(out)], capsys)
     assert code == 2
     assert_one_clear_line(err, "--out")
@@ -95,7 +124,7 @@ def test_out_of_memory_is_one_line_not_a_traceback(tmp_path, capsys, monkeypatch
     def exhausted(*args, **kwargs):
         raise MemoryError
 
-    monkeypatch.setattr(cli, "solver_function", lambda name: exhausted)
+    monkeypatch.setattr(run_command, "solve", exhausted)
     code, err = run_cli(["run", "dome", "--out", str(tmp_path / "out")], capsys)
     assert code == 2
     assert_one_clear_line(err, "out of memory")

@@ -4,8 +4,8 @@ import numpy as np
 import pandas as pd
 from PIL import Image
 
-from smfem import zones
-from smfem.cli import main
+from runs import zones
+from cli import main
 
 
 def test_compare_writes_both_runs_the_table_and_zones_side_by_side(tmp_path, capsys):

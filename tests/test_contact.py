@@ -149,7 +149,7 @@ def test_massless_face_conserves_energy_whatever_the_layer_stiffness():
 
 
 def test_contact_run_writes_the_contract_files(tmp_path):
-    from smfem.cli import main
+    from cli import main
 
     assert main(["run", "rod_impact", "--set", "t_end=5e-5", "--out", str(tmp_path), "--quiet"]) == 0
     import pandas as pd

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from cases import get_case
-from reference_fem import ReferenceResult, solve
+from cases.result import RunResult
+from reference_fem import solve
 from reference_fem import equilibrium
 
 
@@ -15,7 +16,7 @@ def max_norm_error(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
 
 
-def extremum(result: ReferenceResult, name: str, window, kind: str) -> tuple[float, float]:
+def extremum(result: RunResult, name: str, window, kind: str) -> tuple[float, float]:
     """(time, value) of the min or max of probe ``name`` inside the time ``window`` (s)."""
     inside = (result.t >= window[0]) & (result.t <= window[1])
     values = result.history[name][inside]

@@ -20,7 +20,7 @@ from reports.plan import MODAL_TRUTH, REF2D, REF3D, SMFEM, CaseStudy, Series, Tr
 from reports.references import rod_histories
 from reports.study import CaseRuns
 from reports.tables import headline_table
-from smfem.cli import main
+from cli import main
 
 #: a study of seconds: short windows, coarse meshes; the thick cylinder's truth is too coarse
 #: for either target on purpose
@@ -176,9 +176,9 @@ def test_a_solver_that_cannot_run_a_case_gives_not_available(monkeypatch, tmp_pa
 
 
 def test_study_command_writes_tables_and_figures_from_the_cache(tiny, tmp_path, monkeypatch, capsys):
-    import reports.cli
+    import reports.plan
 
-    monkeypatch.setattr(reports.cli, "quick", lambda: TINY)
+    monkeypatch.setattr(reports.plan, "quick", lambda: TINY)  # the study command reads it when it runs
     out = tmp_path / "study"
     assert main(["study", "dome", "--out", str(out), "--cache", str(tiny.out / "runs"), "--quiet"]) == 0
     printed = capsys.readouterr().out

@@ -1,5 +1,5 @@
 """Stiff and extreme settings (issue 7): unconditional stability, near incompressibility, thin
-domes, many harmonics. The figures come from :mod:`smfem.stability_study`, which the report's
+domes, many harmonics. The figures come from :mod:`reports.stability_study`, which the report's
 stability section prints as well.
 """
 
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from cases import get_case
-from smfem import stability_study as study
-from smfem.stability_study import AGREEMENT_LIMIT, ENERGY_DRIFT_LIMIT
+from reports import stability_study as study
+from reports.stability_study import AGREEMENT_LIMIT, ENERGY_DRIFT_LIMIT
 
 
 def assert_conservative(rows):
@@ -175,7 +175,7 @@ def test_stability_table_for_the_report():
 def test_material_contrast_1e2_to_1e10_converges_and_reports_iterations():
     # measured (t_end 12 ms): iterations mean/max 2.52/4, 2.82/5, 3.26/6, 3.60/8, 3.58/8 for
     # contrast 1e-2 ... 1e-10; change against 1e-8: 5.4 %, 0.25 %, 0.11 %, 0, 0.13 %
-    from smfem.stability_study import contrast_sweep
+    from reports.stability_study import contrast_sweep
 
     rows = contrast_sweep()
     assert [r["contrast"] for r in rows] == [1e-2, 1e-4, 1e-6, 1e-8, 1e-10]
@@ -187,7 +187,7 @@ def test_material_contrast_1e2_to_1e10_converges_and_reports_iterations():
 
 def test_contact_at_100_times_v0_with_friction_0_to_1_stays_out_of_the_wall():
     # measured: SMFEM layer compressed 0.15 of its thickness; reference penetration < 1e-18 m
-    from smfem.stability_study import contact_extremes
+    from reports.stability_study import contact_extremes
 
     for r in contact_extremes():
         assert r["converged"] and r["finite"], r

@@ -254,7 +254,7 @@ def test_truth_command_writes_history_and_summary_and_refuses_chosen_keys(tmp_pa
 
     import pandas as pd
 
-    from smfem.cli import main
+    from cli import main
 
     out = tmp_path / "truth"
     assert main(["truth", "dome", "--set", "t_end=5e-5", "--out", str(out), "--quiet"]) == 0

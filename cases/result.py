@@ -1,4 +1,8 @@
-"""What a run returns, whichever solver made it."""
+"""The record every solver returns (data, like the rest of this package: no numerics).
+
+SMFEM, the reference FEM and the reference's modal solution all return a :class:`RunResult`;
+``runs/`` writes it to files (docs/contract.md).
+"""
 
 from __future__ import annotations
 
@@ -21,8 +25,10 @@ class RunResult:
     converged : False if a step failed; ``message`` then names the step and time
     cpu_time_s : process CPU time of the solve (model building and time stepping), s
     mesh : synthesized 3-D field at the last computed step, or None
-    info : solver-specific facts (``harmonics_used``, factorizations, ...)
-    snapshots : plastic strain at the case's plastic-zone times, for :func:`smfem.plots.plastic_zones`
+    info : solver-specific facts (``harmonics_used``, factorizations, ...; each solver's
+        ``solve`` lists its own)
+    snapshots : plastic strain at the case's plastic-zone times (``{'t', 'poly', 'peps'}``, see
+        :mod:`runs.zones`)
     """
 
     t: np.ndarray

@@ -1,4 +1,4 @@
-"""``smfem compare``: one case run by SMFEM and by the reference FEM, side by side.
+"""One case run by SMFEM and by the reference FEM, side by side.
 
 Writes both runs (``smfem/`` and ``reference/``, each as ``smfem run`` would), then
 ``comparison.csv`` (one row per probe), ``histories.png`` (both histories per probe) and, for
@@ -17,27 +17,21 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .zones import plastic_area
-
-
-def probe_error(name: str, a: np.ndarray, b: np.ndarray) -> tuple[str, float]:
-    """Which measure applies to the probe ``name``, and its value (SMFEM ``a``, reference ``b``)."""
-    n = min(len(a), len(b))
-    a, b = np.asarray(a[:n]), np.asarray(b[:n])
-    if name.startswith("peps"):
-        return "peak difference", float((a.max() - b.max()) / b.max()) if b.max() > 0 else float("nan")
-    scale = np.abs(b).max()
-    return "max-norm", float(np.abs(a - b).max() / scale) if scale > 0 else float("nan")
+from runs.errors import probe_error
+from runs.files import write_run
+from runs.figures import plastic_zones, plt
+from runs.registry import REFERENCE, SMFEM, solve
+from runs.zones import plastic_area
 
 
 def comparison_table(smfem_result, reference_result) -> pd.DataFrame:
     rows = []
     for name, a in smfem_result.history.items():
         b = reference_result.history[name]
-        measure, value = probe_error(name, a, b)
+        measure, value = probe_error(name, smfem_result.t, a, reference_result.t, b)
         rows.append({"probe": name, "measure": measure, "relative_error": value,
                      "smfem_peak": float(np.abs(a).max()), "reference_peak": float(np.abs(b).max())})
-    for a, b in zip(smfem_result.snapshots, getattr(reference_result, "snapshots", [])):
+    for a, b in zip(smfem_result.snapshots, reference_result.snapshots):
         sa, sb = plastic_area(a), plastic_area(b)
         rows.append({"probe": f"plastic_area@{a['t']:.6g}", "measure": "zone area",
                      "relative_error": (sa - sb) / sb if sb > 0 else (0.0 if sa == 0 else float("inf")),
@@ -46,8 +40,6 @@ def comparison_table(smfem_result, reference_result) -> pd.DataFrame:
 
 
 def _histories_figure(case, s, r, path: Path) -> None:
-    from .plots import plt
-
     names = list(s.history)
     fig, axes = plt.subplots(len(names), 1, figsize=(7, 2.3 * len(names)), squeeze=False, sharex=True)
     for ax, name in zip(axes[:, 0], names):
@@ -65,22 +57,16 @@ def _histories_figure(case, s, r, path: Path) -> None:
 
 def compare(smfem_case, reference_case, out: Path, progress=None) -> pd.DataFrame:
     """Run both solvers, write their files and the comparison into ``out``; return the table."""
-    from reference_fem import solve as reference_solve
-
-    from .output import write_run
-    from .plots import plastic_zones
-    from .solver import solve as smfem_solve
-
     results = {}
-    for label, case, solve in (("smfem", smfem_case, smfem_solve), ("reference", reference_case, reference_solve)):
+    for label, case in ((SMFEM, smfem_case), (REFERENCE, reference_case)):
         wall0 = time.perf_counter()
-        results[label] = solve(case, progress=progress)
+        results[label] = solve(label, case, progress=progress, fields=True)
         write_run(out / label, case, label, results[label], time.perf_counter() - wall0)
-    s, r = results["smfem"], results["reference"]
+    s, r = results[SMFEM], results[REFERENCE]
     table = comparison_table(s, r)
     table.to_csv(out / "comparison.csv", index=False, float_format="%.6g")
     _histories_figure(smfem_case, s, r, out / "histories.png")
-    if s.snapshots and getattr(r, "snapshots", None):
+    if s.snapshots and r.snapshots:
         plastic_zones({"SMFEM": s.snapshots, "reference FEM": r.snapshots}, out / "plastic_zones.png",
                       f"{smfem_case.name}: plastic zones (equivalent plastic strain >= 0.1 %)")
     return table

@@ -14,7 +14,7 @@ THRESHOLD = 1e-3  # peps that counts as plastic
 
 
 def plastic_zones(rows: dict[str, list[dict]], path: Path, title: str) -> None:
-    """One row of panels per solver (label -> snapshots of :mod:`smfem.zones`), one panel per
+    """One row of panels per solver (label -> snapshots of :mod:`runs.zones`), one panel per
     time; cells with peps >= 0.1 % coloured by peps (in %) on one colour scale for all rows."""
     rows = {label: snaps for label, snaps in rows.items() if snaps}
     vmax = max([100 * s["peps"].max() for snaps in rows.values() for s in snaps] + [0.2])

@@ -1,4 +1,4 @@
-"""Stability on stiff and extreme settings (issue 7): the figures, as tables.
+"""Stability on stiff and extreme settings: the figures of the report's stability section, as tables.
 
 * :func:`free_vibration` -- unconditional stability: linear free vibration with the time step at
   1, 10 and 100 times the explicit (central difference) limit ``dt_cr = 2 / omega_max``;
@@ -8,7 +8,8 @@
 * :func:`many_harmonics` -- 200 Fourier terms for the elastic thick cylinder;
 * :func:`contrast_sweep` -- cut-out contrast 1e-2 to 1e-10, plastic notched cylinder;
 * :func:`contact_extremes` -- rod impact at 100 times v0 with friction 0 to 1, both solvers;
-* :func:`bad_input` -- every out-of-range value of every key through the command line;
+* :func:`bad_input` -- every out-of-range value of every key, through the validation every
+  entry point uses (the command line turns its error into exit 2: ``tests/test_bad_input.py``);
 * :func:`stability_table` -- the headline figures of all of them, one row per figure.
 
 Every function returns a list of dicts (one row per setting); the tests
@@ -18,27 +19,26 @@ prints them. The reference solver is imported only where it is compared against.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
-import io
 import math
-import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 import scipy.sparse.linalg as sla
 
-from cases import CASES, get_case
+from cases import CASES, ParameterError, get_case, parse_sets
 from cases.analytic import lame_cylinder
 from cases.geometry import Axis, Pressure
+from cases.params import out_of_range
 
-from .model import Model
-from .newmark import LinearNewmark
-from .probes import ProbeSet
-from .solver import solve, stacked
+from runs.errors import history_errors
+from runs.registry import solve as run_solver
+from smfem.model import Model
+from smfem.newmark import LinearNewmark
+from smfem.probes import ProbeSet
+from smfem.solver import solve, stacked
 
-#: the acceptance limits of issue 7
+#: the acceptance limits of the stability section
 ENERGY_DRIFT_LIMIT = 1e-10
 AGREEMENT_LIMIT = 0.02
 #: elements per clamped-edge layer width that the 4-node moment-scheme element needs (thin dome)
@@ -194,18 +194,13 @@ def thin_dome(ratios=(54.3, 100, 200, 543, 1000), converged_meridian: int = 160)
     return rows
 
 
-def history_error(a: np.ndarray, b: np.ndarray) -> float:
-    """max|a - b| / max|b| over the window."""
-    return float(np.abs(a - b).max() / np.abs(b).max())
-
-
 def many_harmonics(counts=(20, 80, 200), refine: int = 2, reference_refine: int = 2) -> list[dict]:
     """The elastic thick cylinder with ``counts`` Fourier terms: probe histories against 80 terms
     and against the reference FEM; the modes computed (the loaded ones), dof, CPU time, and the
     paper's dt relative to the explicit limit of that system."""
     from reference_fem import solve as reference
 
-    ref = reference(get_case("thick_cylinder", {"refine": reference_refine})).history
+    ref = reference(get_case("thick_cylinder", {"refine": reference_refine}))
     runs = {n: solve(get_case("thick_cylinder", {"harmonics": n, "refine": refine}), with_fields=False)
             for n in sorted(set(counts) | {80})}
     rows = []
@@ -216,66 +211,28 @@ def many_harmonics(counts=(20, 80, 200), refine: int = 2, reference_refine: int 
                "cpu_time_s": run.cpu_time_s, "dt_over_dt_cr": get_case("thick_cylinder").dt / dt_cr,
                "finite": all(np.isfinite(h).all() for h in run.history.values())}
         for probe, h in run.history.items():
-            row[f"{probe}_vs_80"] = history_error(h, runs[80].history[probe])
-            row[f"{probe}_vs_reference"] = history_error(h, ref[probe])
+            row[f"{probe}_vs_80"] = history_errors(run.t, h, runs[80].t, runs[80].history[probe])[0]
+            row[f"{probe}_vs_reference"] = history_errors(run.t, h, ref.t, ref.history[probe])[0]
         rows.append(row)
     return rows
 
 
-def out_of_range(spec) -> list:
-    """Values that ``spec`` must refuse: past each bound, the open bounds themselves, the
-    non-finite floats, wrong types (as ``--set`` text)."""
-    if spec.type is bool:
-        return ["3", "maybe", "1.0"]
-    if spec.choices is not None:
-        return [repr(max(spec.choices) + 1), "x"]
-    bad = ["nan", "inf", "-inf", "'x'", "(1, 2)"]
-    if spec.lo is not None:
-        bad.append(repr(spec.lo - max(1.0, abs(spec.lo))))
-        if spec.open_lo:
-            bad.append(repr(spec.lo))
-    if spec.hi is not None:
-        bad.append(repr(spec.hi + max(1.0, abs(spec.hi))))
-        if spec.open_hi:
-            bad.append(repr(spec.hi))
-    if spec.type is int:
-        bad += ["1.5", "true"]
-    return bad
-
-
-def cli_outcome(args: list[str]) -> dict:
-    """Run the command line with ``--out`` in a scratch directory: exit status, stderr, whether
-    anything was written, and the history table if one was."""
-    import pandas as pd
-
-    from .cli import main
-
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "out"
-        err = io.StringIO()
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-            code = main(args + ["--out", str(out)])
-        history = pd.read_csv(out / "history.csv") if (out / "history.csv").exists() else None
-        return {"code": code, "stderr": err.getvalue().strip(), "written": out.exists(), "history": history}
-
-
-def bad_input(solvers=("smfem", "reference"), names=tuple(CASES)) -> list[dict]:
-    """Every out-of-range value of every key of the cases ``names``, through ``smfem run``: one
-    row each with the exit status, the message and whether it names the key and the allowed
-    range."""
+def bad_input(names=tuple(CASES)) -> list[dict]:
+    """Every out-of-range value of every key of the cases ``names``, through the validation of
+    :func:`cases.get_case` (which ``smfem run``, the studies and the truth all go through): one
+    row each with the message and whether it is one line naming the key and the allowed range."""
     rows = []
-    for solver in solvers:
-        for name in names:
-            for key, spec in CASES[name].SPECS.items():
-                for text in out_of_range(spec):
-                    o = cli_outcome(["run", name, "--solver", solver, "--set", f"{key}={text}"])
-                    rows.append({
-                        "solver": solver, "case": name, "set": f"{key}={text}", "code": o["code"],
-                        "lines": len(o["stderr"].splitlines()), "message": o["stderr"],
-                        "names_key": key in o["stderr"],
-                        "names_range": "out of range" not in o["stderr"] or spec.describe() in o["stderr"],
-                        "written": o["written"],
-                    })
+    for name in names:
+        for key, spec in CASES[name].SPECS.items():
+            for text in out_of_range(spec):
+                try:
+                    get_case(name, parse_sets([f"{key}={text}"]))
+                    message = ""
+                except ParameterError as exc:
+                    message = str(exc)
+                rows.append({"case": name, "set": f"{key}={text}", "refused": bool(message),
+                             "lines": len(message.splitlines()), "message": message, "names_key": key in message,
+                             "names_range": "out of range" not in message or spec.describe() in message})
     return rows
 
 
@@ -287,8 +244,7 @@ def contrast_sweep(contrasts=(1e-2, 1e-4, 1e-6, 1e-8, 1e-10), t_end: float = 0.0
     base = runs.get(1e-8) or runs[contrasts[-1]]
     rows = []
     for c, r in runs.items():
-        n = min(len(r.t), len(base.t))
-        change = max(history_error(r.history[p][:n], base.history[p][:n]) for p in ("D_ur", "E_ur", "F_ur"))
+        change = max(history_errors(r.t, r.history[p], base.t, base.history[p])[0] for p in ("D_ur", "E_ur", "F_ur"))
         rows.append({"contrast": c, "converged": r.converged, "iterations_mean": r.info["iterations_mean"],
                      "iterations_max": r.info["iterations_max"], "change_vs_1e-8": change,
                      "finite": all(np.isfinite(h).all() for h in r.history.values())})
@@ -300,13 +256,11 @@ def contact_extremes(v0: float = 500.0, frictions=(0.0, 0.5, 1.0), t_end: float 
     """Rod impact at ``v0`` (100 times the scene's) with Coulomb friction 0 to 1: converged,
     finite, and how far the face went into the wall (SMFEM: layer compression in thicknesses;
     reference: penetration of any node, m)."""
-    from reference_fem import solve as reference
-
     rows = []
     for solver in solvers:
         for f in frictions:
             case = get_case("rod_impact", {"v0": v0, "friction": f, "t_end": t_end})
-            r = solve(case, with_fields=False) if solver == "smfem" else reference(case)
+            r = run_solver(solver, case)
             into_wall = r.info["max_layer_compression"] if solver == "smfem" else r.info["max_penetration"]
             rows.append({"solver": solver, "v0": v0, "friction": f, "converged": r.converged, "message": r.message,
                          "finite": all(np.isfinite(h).all() for h in r.history.values()),
@@ -365,9 +319,9 @@ def stability_table() -> list[dict]:
             f"furthest into the wall ({unit})", r["into_wall"], r["into_wall_limit"],
             r["converged"] and r["finite"] and r["into_wall"] < r["into_wall_limit"])
     bad = bad_input()
-    ok = [r for r in bad if r["code"] == 2 and r["lines"] == 1 and r["names_key"] and r["names_range"]
-          and not r["written"]]
-    add("bad input", f"{len(bad)} out-of-range values, every key of every case, both solvers",
-        "exit 2, one line naming the key and range, nothing written", len(ok), len(bad), len(ok) == len(bad))
+    ok = [r for r in bad if r["refused"] and r["lines"] == 1 and r["names_key"] and r["names_range"]]
+    add("bad input", f"{len(bad)} out-of-range values, every key of every case",
+        "refused with one line naming the key and range (exit 2 on the command line)", len(ok), len(bad),
+        len(ok) == len(bad))
     add("study", "all of the above", "wall time, s", time.perf_counter() - t0, None, True)
     return rows

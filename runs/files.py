@@ -1,4 +1,4 @@
-"""Writing a run's files (CONTRACT.md): history.csv, summary.json, fields.vtu."""
+"""A run's files (docs/contract.md): history.csv, summary.json, fields.vtu, plastic zones."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import __version__
+from smfem import __version__
 
 
 def summary(case, solver: str, result, wall_time_s: float) -> dict:
@@ -56,7 +56,7 @@ def write_run(out: Path, case, solver: str, result, wall_time_s: float) -> None:
     if result.mesh is not None:
         result.mesh.write(out / "fields.vtu")
     if getattr(result, "snapshots", None):
-        from .plots import plastic_zones
+        from .figures import plastic_zones
         from .zones import save
 
         save(result.snapshots, out / "plastic_zones.npz")

@@ -1,0 +1,47 @@
+"""``smfem run CASE``: one run, written as history.csv, summary.json, fields.vtu."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+from cases import get_case, parse_sets
+from runs.files import write_run
+from runs.registry import REFERENCE, SMFEM, solve
+
+from .usage import EXIT_NOT_CONVERGED, add_sets, check_writable
+
+
+def add(sub) -> None:
+    run = sub.add_parser("run", help="run one case and write history.csv, summary.json, fields.vtu")
+    run.add_argument("case")
+    run.add_argument("--solver", choices=(SMFEM, REFERENCE), default=SMFEM)
+    add_sets(run)
+    run.add_argument("--out", default=None, help="output directory (default: out/CASE-SOLVER)")
+    run.add_argument("--no-fields", action="store_true", help="do not write fields.vtu")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(handler=command)
+
+
+def command(args) -> int:
+    case = get_case(args.case, parse_sets(args.sets))
+    out = Path(args.out or f"out/{case.name}-{args.solver}")
+    check_writable(out)
+    from tqdm import tqdm
+
+    bar = tqdm(total=case.n_steps, desc=f"{case.name} ({args.solver})", unit="step",
+               disable=args.quiet or None, file=sys.stderr, leave=False)
+    wall0 = time.perf_counter()
+    try:
+        result = solve(args.solver, case, progress=lambda step, n: bar.update(step - bar.n),
+                       fields=not args.no_fields)
+    finally:
+        bar.close()
+    write_run(out, case, args.solver, result, time.perf_counter() - wall0)
+    if not result.converged:
+        print(f"smfem: {case.name}: {result.message}", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
+    print(f"{case.name} ({args.solver}): {len(result.iterations)} steps, {result.n_dof} dof, "
+          f"cpu {result.cpu_time_s:.3g} s -> {out}")
+    return 0

@@ -1,0 +1,46 @@
+"""``smfem study CASE ...`` and ``smfem report``: series of runs, errors against the truth,
+work-precision; the report adds index.html and report.pdf (:mod:`reports.build`)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from .usage import UsageError, add_study_options, check_workers, check_writable
+
+
+def add(sub) -> None:
+    study = sub.add_parser("study", help="convergence and error-against-CPU-time study: tables/*.csv, figures/")
+    study.add_argument("cases", nargs="+", metavar="CASE")
+    add_study_options(study, "out/study")
+    study.set_defaults(handler=command)
+    report = sub.add_parser("report", help="the verification report: index.html, report.pdf, tables/*.csv")
+    add_study_options(report, "out/report")
+    report.set_defaults(handler=command)
+
+
+def command(args) -> int:
+    """1 if a run failed with an error (the outputs are written all the same), else 0."""
+    from reports.build import build  # the reports load matplotlib, jinja2, dask: only when asked
+    from reports.executors import SchedulerUnreachable
+    from reports.jobs import FAILED
+    from reports.plan import full, quick, select
+
+    check_workers(args)
+    plan = select(full() if args.full else quick(), getattr(args, "cases", ()))
+    out = Path(args.out)
+    check_writable(out)
+    try:
+        report = build(plan, out, cache=args.cache and Path(args.cache), scheduler=args.scheduler,
+                       workers=args.workers, progress=not args.quiet, settings="full" if args.full else "quick",
+                       document=args.command == "report")
+    except SchedulerUnreachable as exc:
+        raise UsageError(str(exc)) from None
+    print(report.tables["headline"].to_string(index=False))
+    made = "index.html, report.pdf, " if args.command == "report" else ""
+    print(f"{args.command}: {len(report.study.executed)} runs executed, {report.study.cached} cached, "
+          f"{report.wall_time_s:.1f} s -> {out}/ ({made}tables/, figures/)")
+    failed = [r for an in report.analyses for r in an.runs.all_runs() if r.status == FAILED]
+    for run in failed:
+        print(f"smfem: {run.job.describe()}: failed: {run.message}", file=sys.stderr)
+    return 1 if failed else 0

@@ -1,0 +1,54 @@
+"""Every solver behind one call: ``solve(solver, case) -> RunResult``.
+
+The names are the ones the studies and ``summary.json`` use: ``smfem``, ``reference-2d``,
+``reference-3d`` (the reference FEM with ``dim`` set), ``reference`` (the reference at the
+case's own ``dim``) and ``reference-modal`` (the reference's harmonic model, exact in time).
+Each solver is imported only when it runs, so ``smfem run`` does not load the reference.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Callable
+
+from cases.result import RunResult
+
+SMFEM, REFERENCE, REF2D, REF3D, MODAL = "smfem", "reference", "reference-2d", "reference-3d", "reference-modal"
+SOLVERS = (SMFEM, REFERENCE, REF2D, REF3D, MODAL)
+#: the ``dim`` each reference name fixes
+DIMS = {REF2D: 2, REF3D: 3}
+
+
+def with_dim(solver: str, case):
+    """``case`` with the ``dim`` the solver name fixes (unchanged for the others)."""
+    if solver not in DIMS or case.params.get("dim") == DIMS[solver]:
+        return case
+    from cases import get_case
+
+    return get_case(case.name, {**case.params, "dim": DIMS[solver]})
+
+
+def solve(solver: str, case, progress: Callable[[int, int], None] | None = None,
+          fields: bool = False) -> RunResult:
+    """Run ``case`` with ``solver``; ``fields``: keep the synthesized 3-D field of the last
+    step in ``result.mesh`` (else None)."""
+    if solver not in SOLVERS:
+        raise ValueError(f"unknown solver {solver!r}: choose one of {', '.join(SOLVERS)}")
+    case = with_dim(solver, case)
+    if solver == SMFEM:
+        from smfem.solver import solve as smfem
+
+        return smfem(case, progress=progress, with_fields=fields)
+    if solver == MODAL:
+        from reference_fem.modal import solve as modal
+
+        return modal(case, progress=progress)
+    from reference_fem import solve as reference
+
+    result = reference(case, progress=progress)
+    return result if fields else replace(result, mesh=None)
+
+
+def family(solver: str) -> str:
+    """``smfem``, ``reference`` or ``reference-modal``: the name a run's ``summary.json`` gives."""
+    return REFERENCE if solver in (REF2D, REF3D) else solver
