@@ -15,14 +15,14 @@ import time
 
 import numpy as np
 
-import smfem.solver as solver_module
 from cases import get_case
+from smfem.options import SolverOptions
 from smfem.solver import solve
 
 
-def run(name, **sets):
+def run(name, options=None, **sets):
     t0 = time.process_time()
-    r = solve(get_case(name, sets), with_fields=False)
+    r = solve(get_case(name, sets), options, with_fields=False)
     return r, time.process_time() - t0
 
 
@@ -36,14 +36,12 @@ def main():
                   f"max {r.info['iterations_max']}, cpu {cpu:.2f} s; per iteration (ms): "
                   + ", ".join(f"{k} {v:.3f}" for k, v in per.items()) + f"  [{r.info['solve'][:40]}]")
     for omega in (0.8, 1.0, 1.2, 1.5):
-        solver_module.OMEGA = omega
-        r, cpu = run("thick_cylinder", plastic=True)
+        r, cpu = run("thick_cylinder", SolverOptions(relaxation=omega), plastic=True)
         print(f"omega {omega}: thick_cylinder plastic iterations mean {r.info['iterations_mean']:.2f} "
               f"max {r.info['iterations_max']}, cpu {cpu:.2f} s")
-    solver_module.OMEGA = 1.0
     for direct in (True, False):
         t0 = time.process_time()
-        r = solve(get_case("notched_cylinder", {"plastic": False, "t_end": 1e-3}), with_fields=False, direct=direct)
+        r = solve(get_case("notched_cylinder", {"plastic": False, "t_end": 1e-3}), SolverOptions(direct=direct), with_fields=False)
         print(f"notched_cylinder elastic, 10 steps, direct={direct}: cpu {time.process_time() - t0:.3f} s, "
               f"iterations mean {np.mean(r.iterations):.1f}, converged {r.converged}")
 

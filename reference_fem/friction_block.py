@@ -19,13 +19,12 @@ from skfem import (CellBasis, ElementHex2, ElementQuad2, ElementVector, FacetBas
 from skfem.helpers import dot
 
 from cases.material import lame
-from cases.timeint import newmark_constants
 
 from . import forms
 from .contact import wall_rows
 from .mass import consistent_mass, redistributed_mass
 from .model import INTORDER
-from .newmark import march
+from .newmark import march, newmark_constants
 from .wall import WallSystem
 
 

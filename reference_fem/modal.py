@@ -27,11 +27,10 @@ import scipy.linalg as la
 import scipy.sparse.linalg as sla
 
 from cases.result import RunResult
-from cases.timeint import newmark_constants
 
 from .harmonic import HarmonicModel
 from .linalg import factorize
-from .newmark import march
+from .newmark import march, newmark_constants
 
 #: the largest harmonic decomposed whole (dense eigenproblem)
 MAX_DENSE = 3000

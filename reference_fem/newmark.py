@@ -1,19 +1,40 @@
 """Newmark time stepping (alpha = 0.25, delta = 0.5) as a generator over steps.
 
-Constants come from :func:`cases.timeint.newmark_constants`, shared by every solver. The load is
+alpha and delta come from :mod:`cases.timeint` (the convention every solver follows); the
+constants are computed here, independently of SMFEM's. The load is
 a Heaviside step, on at t = 0, so ``Q(t) = Q`` for every t >= 0 and the initial acceleration
 solves ``M a0 = Q - K u0``. (A test scene may pass a load history ``Q(t)`` instead.)
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Iterator
 
 import numpy as np
 
-from cases.timeint import newmark_constants
+from cases.timeint import ALPHA, DELTA
 
 from .linalg import factorize
+
+
+@dataclass(frozen=True)
+class Newmark:
+    """Newmark integration constants for one time step ``dt``."""
+
+    dt: float
+    a0: float
+    a2: float
+    a3: float
+    a6: float
+    a7: float
+
+
+def newmark_constants(dt: float, alpha: float = ALPHA, delta: float = DELTA) -> Newmark:
+    """``a0 = 1/(alpha dt^2)``, ``a2 = 1/(alpha dt)``, ``a3 = 1/(2 alpha) - 1``,
+    ``a6 = dt (1 - delta)``, ``a7 = delta dt``."""
+    return Newmark(dt, a0=1.0 / (alpha * dt * dt), a2=1.0 / (alpha * dt), a3=0.5 / alpha - 1.0,
+                   a6=dt * (1.0 - delta), a7=delta * dt)
 
 
 def march(system, Q, u0: np.ndarray, v0: np.ndarray, dt: float, n_steps: int,

@@ -12,13 +12,12 @@ from skfem.io.meshio import HEX_MAPPING
 
 from cases.params import UnsupportedCase
 from cases.result import RunResult
-from cases.timeint import newmark_constants
 
 from .equilibrium import Elastic, NotConverged, Plastic
 from .frames import AXISYMMETRIC, mesh_frame_to_cartesian, to_cartesian
 from .mesh import build_mesh, mirror_permutation
 from .model import INTORDER, Model
-from .newmark import march
+from .newmark import march, newmark_constants
 from .probes import Probes
 from .zones import snapshot as zone_snapshot
 from .wall import ContactLog, WallSystem, case_wall_rows

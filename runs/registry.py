@@ -29,16 +29,17 @@ def with_dim(solver: str, case):
 
 
 def solve(solver: str, case, progress: Callable[[int, int], None] | None = None,
-          fields: bool = False) -> RunResult:
+          fields: bool = False, options=None) -> RunResult:
     """Run ``case`` with ``solver``; ``fields``: keep the synthesized 3-D field of the last
-    step in ``result.mesh`` (else None)."""
+    step in ``result.mesh`` (else None); ``options``: SMFEM's
+    :class:`smfem.options.SolverOptions` (the reference has none)."""
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}: choose one of {', '.join(SOLVERS)}")
     case = with_dim(solver, case)
     if solver == SMFEM:
         from smfem.solver import solve as smfem
 
-        return smfem(case, progress=progress, with_fields=fields)
+        return smfem(case, options, progress=progress, with_fields=fields)
     if solver == MODAL:
         from reference_fem.modal import solve as modal
 

@@ -13,7 +13,7 @@ re-evaluated inside the iterations of a step:
   along x3), so the tangential stress follows Coulomb's law (18)-(19); with ``f = 0`` a closed
   point always slips. The matrix of a slipping point is the law's consistent tangent (the
   direction turns with the tangential strain, as in a return mapping), so the iterations are
-  Newton's; where they still cycle they are damped (:meth:`ContactNewmark.step`).
+  Newton's; where they still cycle they are damped (:meth:`ContactSystem.solve`).
 
 Two points per layer element, not one at its centre: with the moment scheme's gradient terms
 in the stiffness and the state taken at the centre, closing an element could pull its centre
@@ -46,26 +46,24 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
 from cases.geometry import RING
-from cases.timeint import newmark_constants
 
 from . import element, fourier
+from .fourier import Mode
 from .model import ModelError
+from .newmark import Constants, State, StepFailed
+from .options import SolverOptions
 from .sampling import GAUSS_A
 
 OPEN, STICK, SLIP = 0, 1, 2
 NORMAL = 1  # strain row e22: normal to the layer
 SHEAR = [3, 5]  # g12 (tangential in the section plane) and g23 (tangential along x3)
 TRACTION = [NORMAL] + SHEAR  # the only rows that carry stress in the layer
-#: iterations over the layer states allowed in one step
-MAX_STATE_ITERATIONS = 60
 #: the smallest share of a step towards the next iterate before a cycle counts as chattering
 MIN_RELAXATION = 1.0 / 16
 #: a slip direction that moves less than this between iterations has settled
 DIRECTION_TOL = 1e-6
-#: layer points along the circumference per harmonic kept: products of harmonics are exact with
-#: 2, the edge of a contact zone needs more (tilted rod, 6 harmonics, against 16 per harmonic:
-#: 4 give contact_p 0.9 % and the struck rim 1.9 % off, 8 give 0.24 % and 0.29 %)
-POINTS_PER_HARMONIC = 8
+#: relative energy gain over a run without loads beyond which the result is rejected
+ENERGY_GAIN_LIMIT = 0.01
 #: layer matrices kept per run, keyed by state (a few patterns recur)
 CACHE_SIZE = 64
 
@@ -90,7 +88,7 @@ class LayerStates(NamedTuple):
         return self.kind.tobytes() + self.direction.tobytes() + self.kappa.tobytes()
 
 
-class ContactError(RuntimeError):
+class ContactError(StepFailed):
     """Contact states that do not settle, or a face pushed through the wall."""
 
 
@@ -102,13 +100,15 @@ class ContactLayer:
     model : :class:`smfem.model.Model` of a body of revolution without cut-outs
     thickness : layer thickness h (length units of the case)
     stiffness : layer Young's modulus E_l
+    points_per_harmonic : layer points around the circumference per harmonic kept
+        (:class:`smfem.options.SolverOptions`)
 
     Point arrays are shaped ``(n_points, n_x3, ...)``, two points (the Gauss points along the
     face) per layer element; face displacements ``(n_modes, n_F)`` over the full dofs ``F`` of
     the face nodes.
     """
 
-    def __init__(self, model, thickness: float, stiffness: float):
+    def __init__(self, model, thickness: float, stiffness: float, points_per_harmonic: int = 8):
         case = model.case
         if case.body != RING:
             raise ModelError(f"{case.name}: the contact layer is implemented for bodies of revolution only")
@@ -151,7 +151,7 @@ class ContactLayer:
         if l_max == 0 and wall.slope:
             raise ModelError(f"{case.name}: a tilted wall (wall_slope > 0) makes the contact vary around "
                              f"the circumference: set harmonics >= 2")
-        n_x3 = 1 if l_max == 0 else POINTS_PER_HARMONIC * (l_max + 1)
+        n_x3 = 1 if l_max == 0 else points_per_harmonic * (l_max + 1)
         self.x3 = 2 * math.pi * np.arange(n_x3) / n_x3
         self.w = np.full(n_x3, 2 * math.pi / n_x3)
         self.psi = np.stack([np.where(fourier.ROW_TYPE == 0, *(v[:, None] for v in fourier.psi(m, self.x3, RING, 0.0)))
@@ -290,8 +290,8 @@ def face_free_mass(model, edge: str, i: int = 0) -> np.ndarray:
     return m.ravel()
 
 
-class ContactNewmark:
-    """Average-acceleration Newmark of a ring model with a contact layer.
+class ContactSystem:
+    """The steps of a ring model with a contact layer (a system of :func:`smfem.newmark.march`).
 
     Each step iterates: solve with the layer matrix of the current states, re-evaluate the
     states from the new displacements, until no state (and no slip direction) changes. Each
@@ -299,19 +299,24 @@ class ContactNewmark:
     ``(A0 + C' k C) x = b`` (``A0`` block-diagonal over the modes, ``C`` the face rows, ``k``
     the layer's dense face matrix, which couples the modes) is solved as ``x = y - Z c`` with
     ``y = A0^-1 b``, ``Z = A0^-1 C'`` (per mode, once) and the small dense system
-    ``(I + k S) c = k C y``, ``S = C Z`` (Woodbury).
+    ``(I + k S) c = k C y``, ``S = C Z`` (Woodbury). The face nodes are massless
+    (:func:`face_free_mass`).
     """
 
-    def __init__(self, model, layer: ContactLayer, dt: float, massless_face: bool = True):
+    HOW = ("contact layer (17)-(19): states per layer Gauss point and point along x3, iterated per step; "
+           "one factorization per mode, the layer's face matrix by Woodbury")
+
+    def __init__(self, model, dt: float, options: SolverOptions):
+        case = model.case
+        p = case.params
+        layer = self.layer = ContactLayer(model, p["layer_thickness"], p["layer_stiffness"] * case.material.E,
+                                          options.layer_points_per_harmonic)
         systems = model.systems
-        self.layer, self.K = layer, [s.K for s in systems]
+        self.model, self.K, self.max_state_iterations = model, [s.K for s in systems], options.max_state_iterations
         self.Q = np.concatenate([s.Q for s in systems])
-        edge = model.case.wall.edge
-        # massless_face=False keeps the face nodes' mass: only to show what it does (tests)
-        self.m_full = [face_free_mass(model, edge, i) if massless_face else model.full_mass(i, i)
-                       for i in range(len(systems))]
+        self.m_full = [face_free_mass(model, case.wall.edge, i) for i in range(len(systems))]
         self.M = np.concatenate([s.T.multiply(s.T).T @ m for s, m in zip(systems, self.m_full)])
-        self.c = newmark_constants(dt)
+        self.c = Constants.of(dt)
         self.offsets = layer.offsets
         self.lus = [sla.splu((K + sp.diags(self.c.a0 * M)).tocsc()) for K, M in zip(self.K, self.blocks(self.M))]
         self.factorizations = len(self.lus)
@@ -322,6 +327,8 @@ class ContactNewmark:
             self.S[i * nF:(i + 1) * nF, i * nF:(i + 1) * nF] = C @ Z
         self.face_blocks: dict[bytes, np.ndarray] = {}
         self.max_closure = 0.0  # largest layer compression over the run, in layer thicknesses
+        self.velocity_row = self._mean_axial_velocity_row()
+        self.energies, self.closed, self.contact_steps, self.last = [], [0.0], [], None
 
     def blocks(self, vector: np.ndarray) -> list[np.ndarray]:
         """The per-mode parts of a stacked vector."""
@@ -330,6 +337,17 @@ class ContactNewmark:
     def stiffness_product(self, u: np.ndarray) -> np.ndarray:
         """``K u`` of the body (all modes stacked)."""
         return np.concatenate([K @ ui for K, ui in zip(self.K, self.blocks(u))])
+
+    def _mean_axial_velocity_row(self) -> np.ndarray:
+        """Row giving the mass-weighted mean axial velocity (momentum / mass) of stacked
+        amplitudes: only harmonic 0 carries a mean."""
+        row = np.zeros(self.model.n_dof)
+        for i, (s, m_full) in enumerate(zip(self.model.systems, self.m_full)):
+            if s.mode == Mode(0, "c"):
+                axial = np.zeros_like(m_full)
+                axial[1::3] = m_full[1::3]  # x2 = z is the axis of the rod
+                row[self.offsets[i]:self.offsets[i + 1]] = (s.T.T @ axial) / axial.sum()
+        return row
 
     def _solve(self, states: LayerStates, y: np.ndarray) -> np.ndarray:
         """Solution with the layer in ``states``, given ``y = A0^-1 b`` of the step's load ``b``.
@@ -350,11 +368,12 @@ class ContactNewmark:
 
     def initial_acceleration(self, u: np.ndarray) -> np.ndarray:
         """``M a = Q - K u``; the massless face nodes carry no initial acceleration."""
+        self.strain, self.states = self.layer.strain(u), self.layer.states
         force = self.Q - self.stiffness_product(u)
         return np.divide(force, self.M, out=np.zeros_like(force), where=self.M > 0)
 
-    def step(self, u, v, a, step_index: int, t: float):
-        """One step; returns ``(u, v, a, iterations, strain, states)``.
+    def solve(self, predicted: np.ndarray, u: np.ndarray, step_index: int, t: float) -> tuple[np.ndarray, int]:
+        """One step's displacement and its state iterations.
 
         Iterates ``x -> solve(states_of(x))`` until the states a solution was computed with are
         its own. Where that cycles (a point at the edge of the contact zone, a slip direction
@@ -362,11 +381,10 @@ class ContactNewmark:
         halved at every cycle: a damped Newton method on the piecewise linear layer law.
         """
         c, layer = self.c, self.layer
-        predicted = u + (c.a2 / c.a0) * v + (c.a3 / c.a0) * a
         load = self.Q + c.a0 * self.M * predicted
         base = np.concatenate([lu.solve(r) for lu, r in zip(self.lus, self.blocks(load))])
         states, current, omega, seen = layer.states, None, 1.0, []
-        for iteration in range(1, MAX_STATE_ITERATIONS + 1):
+        for iteration in range(1, self.max_state_iterations + 1):
             new = self._solve(states, base)
             strain = layer.strain(new)
             following = layer.states_of(strain)
@@ -382,14 +400,57 @@ class ContactNewmark:
             states = following if omega == 1.0 else layer.states_of(layer.strain(current))
         else:
             raise ContactError(f"step {step_index} (t = {t:.6g} s): contact states did not settle in "
-                               f"{MAX_STATE_ITERATIONS} iterations (state chattering)")
+                               f"{self.max_state_iterations} iterations (state chattering)")
         closure = -(strain[..., NORMAL] + layer.gap / layer.h)
         self.max_closure = max(self.max_closure, float(closure.max()))
         if closure.max() >= 1.0:
             raise ContactError(f"step {step_index} (t = {t:.6g} s): the face went through the wall (layer "
                                f"compressed {closure.max():.3g} times its thickness): raise layer_stiffness "
                                f"or lower dt")
-        layer.commit(strain, states)
-        acc = c.a0 * (new - predicted)
-        vel = v + c.a6 * a + c.a7 * acc
-        return new, vel, acc, iteration, strain, states
+        self.strain, self.states = strain, states
+        return new, iteration
+
+    def commit(self, u: np.ndarray) -> None:
+        self.layer.commit(self.strain, self.states)
+
+    # -- what a run reports ---------------------------------------------------------------------
+    def contact_pressure(self, state: State) -> float:
+        """The layer's mean normal stress on the struck face (``edge_mean`` of sigma)."""
+        return self.layer.mean_normal_stress(self.strain, self.states)
+
+    def mean_axial_velocity(self, state: State) -> float:
+        """Mass-weighted mean axial velocity (``body_mean`` of v)."""
+        return float(self.velocity_row @ state.v)
+
+    def energy(self, state: State) -> float:
+        """Kinetic + strain energy of the body and the layer (the model's integrals over x3)."""
+        u, v = state.u, state.v
+        body = 0.5 * v @ (self.M * v) + 0.5 * u @ self.stiffness_product(u)
+        return float(body + self.layer.energy(self.strain, self.states))
+
+    def observe(self, state: State) -> None:
+        """After every state: the energy at t = 0, the closed share of the face, the contact steps."""
+        if state.n == 0:
+            self.energies.append(self.energy(state))
+        else:
+            self.closed.append(self.layer.closed_fraction(self.states))
+            if self.closed[-1] > 0:
+                self.contact_steps.append(state.n)
+        self.last = state
+
+    def report(self) -> tuple[str, dict]:
+        """The run's verdict (``''`` or why it is rejected) and the contact facts of ``info``."""
+        dt = self.c.dt
+        before, after = self.energies[0], self.energy(self.last)
+        gain = after / before - 1 if before > 0 else 0.0
+        message = ""
+        if not self.model.case.loads and gain > ENERGY_GAIN_LIMIT:
+            # nothing does work on the rod: energy can only stay or be dissipated by friction
+            message = (f"contact created energy: +{gain:.1%} over the run (a layer too stiff for dt chatters "
+                       f"unseen between steps): lower layer_stiffness or dt")
+        steps = self.contact_steps
+        return message, {
+            "layer_elements": self.layer.n_elements, "layer_points_x3": int(self.layer.states.kind.shape[1]),
+            "energy_before": before, "energy_after": after,
+            "contact_window": [steps[0] * dt, steps[-1] * dt] if steps else None,
+            "max_layer_compression": self.max_closure, "closed_fraction": self.closed}

@@ -8,6 +8,8 @@ inertia with the mass coupling, in Gauss-Seidel order. Within a sweep the stress
 block's update elastically (15); at the end of the sweep they are recomputed from the step's
 strain increment with Wilkins' correction (16). Converged when the relative change of the
 amplitudes in a sweep is below ``tol``. The material state is committed only then.
+
+A system of :func:`smfem.newmark.march`.
 """
 
 from __future__ import annotations
@@ -19,14 +21,15 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-from cases.timeint import newmark_constants
 from cases.material import lame
 
+from .newmark import Constants, StepFailed
+from .options import SolverOptions
 from .plasticity import intensity, wilkins
 from .sampling import SamplePoints
 
 
-class NotConverged(RuntimeError):
+class NotConverged(StepFailed):
     """A time step did not converge within the allowed iterations."""
 
 
@@ -46,23 +49,24 @@ class PointState:
 
 
 class BlockIterative:
-    """Newmark steps of a nonlinear SMFEM model by block SOR over the harmonics.
+    """The steps of a nonlinear SMFEM model by block SOR over the harmonics.
 
     Parameters
     ----------
     model : a :class:`smfem.model.Model` built with ``nonlinear=True``
     dt : time step, s
-    omega : relaxation factor of the block SOR
-    tol : relative change of the amplitudes that ends the iterations
-    max_iter : iterations allowed per step before the run stops as not converged
+    options : relaxation (omega of the block SOR), tolerance (relative change of the amplitudes
+        that ends the iterations) and the iteration limit
+    coupled : ``(K, M)`` of the whole coupled elastic system, to iterate with it instead of the
+        diagonal blocks
     """
 
-    def __init__(self, model, dt: float, omega: float = 1.0, tol: float = 1e-5, max_iter: int = 200,
-                 coupled: tuple | None = None):
-        self.model, self.omega, self.tol, self.max_iter = model, omega, tol, max_iter
-        self.c = newmark_constants(dt)
-        self.b1, self.b2 = self.c.a2 / self.c.a0, self.c.a3 / self.c.a0
+    def __init__(self, model, dt: float, options: SolverOptions, coupled: tuple | None = None):
+        self.model, self.omega = model, options.relaxation
+        self.tol, self.max_iter = options.tolerance_for(model.case), options.max_iterations
+        self.c = Constants.of(dt)
         self.points = SamplePoints(model)
+        self.split = lambda x: np.split(x, self.points.offsets[1:-1])
         S = model.systems
         if coupled is None:
             self.lu = [sla.splu((s.K + sp.diags(self.c.a0 * s.M)).tocsc()) for s in S]
@@ -89,22 +93,34 @@ class BlockIterative:
             out = out + Mij @ (new[j] - predicted[j])
         return self.c.a0 * out
 
-    def initial(self, u0: list[np.ndarray], v0: list[np.ndarray]):
-        """Displacements, velocities and accelerations at t = 0 from ``M a = Q - R(u0)``."""
+    @property
+    def peps(self) -> np.ndarray:
+        return self.state.peps
+
+    def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
+        """``M a = Q - R(u0)``, the stresses of ``u0`` taken as the state at t = 0."""
         S = self.model.systems
-        self.state = PointState(self.points.stress(u0), self.state.eps_p, self.state.alpha)
+        self.state = PointState(self.points.stress(self.split(u0)), self.state.eps_p, self.state.alpha)
         force = np.concatenate([s.Q for s in S]) - self.points.forces(self.state.sigma)
         if self.model.coupling:
-            a = np.split(sla.spsolve(self.model.mass_matrix().tocsc(), force), self.points.offsets[1:-1])
-        else:
-            a = np.split(force / np.concatenate([s.M for s in S]), self.points.offsets[1:-1])
-        return [u.copy() for u in u0], [v.copy() for v in v0], a
+            return sla.spsolve(self.model.mass_matrix().tocsc(), force)
+        return force / np.concatenate([s.M for s in S])
 
-    def step(self, u, v, a, step_index: int, t: float):
-        """One time step; returns the new ``(u, v, a)`` and the number of iterations."""
+    def commit(self, u: np.ndarray) -> None:
+        self.state = self.pending
+
+    def observe(self, state) -> None:
+        """Nothing to watch between steps."""
+
+    def report(self) -> tuple[str, dict]:
+        return "", {"n_x3_points": len(self.model.x3), "time_breakdown_s": dict(self.timings)}
+
+    def solve(self, predicted: np.ndarray, u: np.ndarray, step_index: int, t: float) -> tuple[np.ndarray, int]:
+        """One time step's iterations from the last step's ``u``; the new amplitudes and the
+        number of iterations (the material state waits for :meth:`commit`)."""
         S, c, pts = self.model.systems, self.c, self.points
         tick = time.perf_counter
-        predicted = [ui + self.b1 * vi + self.b2 * ai for ui, vi, ai in zip(u, v, a)]
+        predicted, u = self.split(predicted), self.split(u)
         new = [ui.copy() for ui in u]
         sigma = self.state.sigma.copy()
         for iteration in range(1, self.max_iter + 1):
@@ -146,10 +162,8 @@ class BlockIterative:
                 raise NotConverged(f"step {step_index} (t = {t:.6g} s) diverged at iteration {iteration}: "
                                    f"the amplitudes are no longer finite")
             if change2 <= self.tol**2 * max(size2, 1e-300):
-                self.state = PointState(sigma, self.state.eps_p + deps_p, alpha)
-                accel = [c.a0 * (x - p) for x, p in zip(new, predicted)]
-                vel = [vi + c.a6 * ai + c.a7 * an for vi, ai, an in zip(v, a, accel)]
-                return new, vel, accel, iteration
+                self.pending = PointState(sigma, self.state.eps_p + deps_p, alpha)
+                return np.concatenate(new), iteration
         raise NotConverged(
             f"step {step_index} (t = {t:.6g} s) did not converge in {self.max_iter} iterations "
             f"(relative change {np.sqrt(change2 / max(size2, 1e-300)):.3g}, tol {self.tol:g})"

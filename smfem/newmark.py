@@ -1,37 +1,89 @@
-"""Newmark time stepping of decoupled amplitude subsystems (paper (9)-(11)).
+"""Newmark time stepping (paper (9)-(11)) of any SMFEM system, as one generator over steps.
 
-All modes are stepped together as one block-diagonal system: one factorization of
-``K + a0 M`` per time-step size, one solve per step, so the per-step overhead stays small
-even for many small harmonic blocks.
+Every step of every scene is the same predictor and corrector; what differs is how the
+step's equilibrium is solved, which a *system* does:
+
+* ``initial_acceleration(u0)``: ``a`` at t = 0 from ``M a = Q - R(u0)`` (the load is on at t = 0);
+* ``solve(predicted, u, step, t)``: the displacement ``u_new`` and the iterations it took, where
+  the step's inertia is ``M a0 (u_new - predicted)``; raises :class:`StepFailed`;
+* ``commit(u_new)``: the step converged; its material or contact state becomes the next
+  step's start;
+* ``observe(state)``: after every state the run records (t = 0 included);
+* ``report()``: at the end, a verdict on the whole run (``''`` if none) and facts for ``info``.
+
+:class:`LinearSystem` (decoupled harmonics or the whole coupled block system, one factorization),
+:class:`smfem.iterative.BlockIterative` (plastic and inhomogeneous steps) and
+:class:`smfem.contact.ContactSystem` (the contact layer) are the three.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Iterator
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-from cases.timeint import newmark_constants
+from cases.timeint import ALPHA, DELTA
+
+
+class StepFailed(RuntimeError):
+    """A time step that could not be solved; the steps before it stand."""
+
+
+@dataclass(frozen=True)
+class Constants:
+    """Newmark constants of one time step, in the paper's notation (9)-(11)."""
+
+    dt: float
+    a0: float
+    a2: float
+    a3: float
+    a6: float
+    a7: float
+
+    @classmethod
+    def of(cls, dt: float, alpha: float = ALPHA, delta: float = DELTA) -> "Constants":
+        return cls(dt, a0=1.0 / (alpha * dt * dt), a2=1.0 / (alpha * dt), a3=0.5 / alpha - 1.0,
+                   a6=dt * (1.0 - delta), a7=delta * dt)
 
 
 @dataclass
 class State:
-    """Displacement, velocity and acceleration (reduced, all modes stacked) after step ``n``."""
+    """Displacement, velocity and acceleration (all modes stacked) after step ``n``, and the
+    iterations the step took (0 at t = 0)."""
 
     n: int
     u: np.ndarray
     v: np.ndarray
     a: np.ndarray
+    iterations: int = 0
 
 
-class LinearNewmark:
-    """Average-acceleration Newmark for ``M a + K u = Q``.
+def march(system, u0: np.ndarray, v0: np.ndarray, dt: float, n_steps: int) -> Iterator[State]:
+    """Yield the state at t = 0, then after each of ``n_steps`` steps (:class:`StepFailed`
+    from ``system.solve`` ends it)."""
+    c = Constants.of(dt)
+    # a0 u + a2 v + a3 a = a0 (u + b1 v + b2 a): the same right-hand side in fewer operations
+    b1, b2 = c.a2 / c.a0, c.a3 / c.a0
+    state = State(0, u0.copy(), v0.copy(), system.initial_acceleration(u0))
+    yield state
+    for n in range(1, n_steps + 1):
+        predicted = state.u + b1 * state.v + b2 * state.a
+        u, iterations = system.solve(predicted, state.u, n, n * dt)
+        system.commit(u)
+        a = c.a0 * (u - predicted)  # = a0 (u - u_t) - a2 v - a3 a
+        state = State(n, u, state.v + c.a6 * state.a + c.a7 * a, a, iterations)
+        yield state
+
+
+class LinearSystem:
+    """``M a + K u = Q`` with one factorization of ``K + a0 M`` per time-step size.
 
     Parameters
     ----------
-    K : (n, n) sparse stiffness
+    K : (n, n) sparse stiffness (block-diagonal over decoupled modes, or the coupled system)
     M : (n,) lumped mass diagonal, or (n, n) sparse mass where harmonics couple through rho(lm)
     Q : (n,) load held from t = 0
     dt : time step, s
@@ -39,36 +91,30 @@ class LinearNewmark:
 
     def __init__(self, K: sp.spmatrix, M, Q: np.ndarray, dt: float):
         self.K, self.Q = K.tocsr(), Q
-        self.c = newmark_constants(dt)
         self.diagonal_mass = isinstance(M, np.ndarray) and M.ndim == 1
         self.M = M if self.diagonal_mass else sp.csr_matrix(M)
-        self.a0M = self.c.a0 * self.M
+        self.a0M = Constants.of(dt).a0 * self.M
         self.lu = sla.splu((self.K + (sp.diags(self.a0M) if self.diagonal_mass else self.a0M)).tocsc())
         self.factorizations = 1
-        # a0 u + a2 v + a3 a = a0 (u + b1 v + b2 a): the same right-hand side in fewer operations
-        self.b1, self.b2 = self.c.a2 / self.c.a0, self.c.a3 / self.c.a0
 
-    def initial(self, u0: np.ndarray, v0: np.ndarray) -> State:
-        """State at t = 0 with ``M a0 = Q - K u0`` (the load is on at t = 0)."""
+    def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
         force = self.Q - self.K @ u0
-        a = force / self.M if self.diagonal_mass else sla.spsolve(self.M.tocsc(), force)
-        return State(0, u0.copy(), v0.copy(), a)
+        return force / self.M if self.diagonal_mass else sla.spsolve(self.M.tocsc(), force)
 
-    def step(self, s: State) -> State:
-        """One step of (9)-(11): ``(K + a0 M) u = Q + M (a0 u + a2 v + a3 a)`` and the updates."""
-        c = self.c
-        predicted = s.u + self.b1 * s.v + self.b2 * s.a
-        u = self.lu.solve(self.Q + (self.a0M * predicted if self.diagonal_mass else self.a0M @ predicted))
-        a = c.a0 * (u - predicted)  # = a0 (u - u_t) - a2 v - a3 a
-        return State(s.n + 1, u, s.v + c.a6 * s.a + c.a7 * a, a)
+    def solve(self, predicted: np.ndarray, u: np.ndarray, step: int, t: float) -> tuple[np.ndarray, int]:
+        """``(K + a0 M) u = Q + a0 M predicted``."""
+        return self.lu.solve(self.Q + (self.a0M * predicted if self.diagonal_mass else self.a0M @ predicted)), 1
 
-    def run(self, state: State, n_steps: int):
-        """Yield the state after each of ``n_steps`` steps."""
-        for _ in range(n_steps):
-            state = self.step(state)
-            yield state
+    def commit(self, u: np.ndarray) -> None:
+        """Nothing to keep: the system has no state."""
 
-    def energy(self, s: State) -> tuple[float, float]:
+    def observe(self, state: State) -> None:
+        """Nothing to watch between steps."""
+
+    def report(self) -> tuple[str, dict]:
+        return "", {}
+
+    def energy(self, u: np.ndarray, v: np.ndarray) -> tuple[float, float]:
         """Kinetic and strain energy ``(v'Mv/2, u'Ku/2)``."""
-        Mv = self.M * s.v if self.diagonal_mass else self.M @ s.v
-        return 0.5 * s.v @ Mv, 0.5 * s.u @ (self.K @ s.u)
+        Mv = self.M * v if self.diagonal_mass else self.M @ v
+        return 0.5 * v @ Mv, 0.5 * u @ (self.K @ u)

@@ -11,6 +11,7 @@ import scipy.sparse as sp
 
 from . import element, fourier
 from .mesh import SectionMesh
+from .model import ModelError
 from .sampling import GAUSS_A, GAUSS_ETA, GAUSS_XI
 
 
@@ -130,3 +131,39 @@ class ProbeSet:
         """Probe values from the stacked reduced displacements and velocities of all modes."""
         values = self.on_u @ u
         return values if self.on_v is None else values + self.on_v @ v
+
+
+#: probes a system answers itself: (kind, field) -> the system's method
+SYSTEM_PROBES = {("edge_mean", "sigma"): "contact_pressure", ("body_mean", "v"): "mean_axial_velocity"}
+
+
+class CaseProbes:
+    """Every probe of a case, in the case's order, from a step's state and its system: point
+    probes of u, v, sigma (:class:`ProbeSet`), plastic strains (:class:`PlasticStrainProbes` of
+    ``system.peps``) and what a system answers itself (:data:`SYSTEM_PROBES`: the contact
+    pressure and the mean velocity of a contact run)."""
+
+    def __init__(self, case, model, system):
+        linear = [q for q in case.probes if q.field != "peps" and q.kind == "point"]
+        plastic = [q for q in case.probes if q.field == "peps"]
+        self.points = ProbeSet(model, linear)
+        self.plastic = PlasticStrainProbes(model, plastic) if plastic else None
+        self.names = list(case.probe_names)
+        self.columns = []
+        for q in case.probes:
+            if q.field == "peps":
+                if not hasattr(system, "peps"):
+                    raise ModelError(f"{case.name}: probe {q.name!r} needs plasticity (set plastic=true)")
+                self.columns.append(("plastic", plastic.index(q)))
+            elif q.kind == "point":
+                self.columns.append(("point", linear.index(q)))
+            elif hasattr(system, SYSTEM_PROBES.get((q.kind, q.field), "")):
+                self.columns.append(("system", SYSTEM_PROBES[q.kind, q.field]))
+            else:
+                raise ModelError(f"{case.name}: probe {q.name!r} ({q.kind} of {q.field}) is not available here")
+
+    def values(self, state, system) -> np.ndarray:
+        point = self.points.evaluate(state.u, state.v)
+        plastic = self.plastic.evaluate(system.peps) if self.plastic else ()
+        return np.array([point[i] if kind == "point" else plastic[i] if kind == "plastic"
+                         else getattr(system, i)(state) for kind, i in self.columns])

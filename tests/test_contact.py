@@ -7,8 +7,8 @@ import pytest
 from cases import get_case
 from reports.metrics import moving_average
 from smfem.contact import NORMAL, SHEAR, SLIP, STICK, ContactLayer
-from smfem.contact_run import solve_contact
 from smfem.model import Model
+from smfem.options import SolverOptions
 from smfem.solver import solve
 
 
@@ -107,10 +107,12 @@ def test_face_through_the_wall_is_reported():
     assert not r.converged and "through the wall" in r.message and "step" in r.message
 
 
-def _with_massive_face(**sets):
+def _with_massive_face(monkeypatch, **sets):
     """The run as it would be with the face nodes' mass kept (what mass redistribution cures)."""
-    case = get_case("rod_impact", sets)
-    return solve_contact(case, Model(case), massless_face=False)
+    import smfem.contact as contact
+
+    monkeypatch.setattr(contact, "face_free_mass", lambda model, edge, i: model.full_mass(i, i))
+    return solve(get_case("rod_impact", sets))
 
 
 def test_chattering_states_are_reported(monkeypatch):
@@ -123,19 +125,18 @@ def test_chattering_states_are_reported(monkeypatch):
     """
     import smfem.contact as contact
 
-    monkeypatch.setattr(contact, "POINTS_PER_HARMONIC", 4)
+    four = SolverOptions(layer_points_per_harmonic=4)
     case = get_case("rod_impact", {"wall_slope": 0.01, "harmonics": 6, "friction": 0.3})
-    assert solve(case).converged
+    assert solve(case, four).converged
     monkeypatch.setattr(contact, "MIN_RELAXATION", 1.0)
-    r = solve(case)
+    r = solve(case, four)
     assert not r.converged and "cycle" in r.message and "chattering" in r.message and "step 344" in r.message
-    monkeypatch.setattr(contact, "MAX_STATE_ITERATIONS", 2)
-    r = solve(case)
+    r = solve(case, SolverOptions(layer_points_per_harmonic=4, max_state_iterations=2))
     assert not r.converged and "did not settle in 2 iterations" in r.message
 
 
-def test_energy_created_by_contact_is_reported():
-    r = _with_massive_face(nu=0.0, layer_stiffness=0.3)
+def test_energy_created_by_contact_is_reported(monkeypatch):
+    r = _with_massive_face(monkeypatch, nu=0.0, layer_stiffness=0.3)
     assert not r.converged and "created energy" in r.message
     assert r.info["energy_after"] > 1.5 * r.info["energy_before"]
 

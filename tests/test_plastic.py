@@ -8,6 +8,7 @@ import pytest
 from cases import get_case
 from cases.material import lame
 from smfem.plasticity import intensity, shear_intensity, wilkins
+from smfem.options import SolverOptions
 from smfem.solver import solve
 
 
@@ -90,9 +91,8 @@ def test_plastic_thick_cylinder_yields_and_converges_in_few_iterations():
     assert result.info["harmonics_used"] == [f"{l}c" for l in range(0, 20, 2)]
 
 
-def test_not_converged_step_is_reported_with_the_history_kept(monkeypatch):
-    monkeypatch.setattr("smfem.solver.MAX_ITERATIONS", 2)
-    result = solve(get_case("thick_cylinder", {"plastic": True}), with_fields=False)
+def test_not_converged_step_is_reported_with_the_history_kept():
+    result = solve(get_case("thick_cylinder", {"plastic": True}), SolverOptions(max_iterations=2), with_fields=False)
     assert not result.converged and "did not converge" in result.message and "t = " in result.message
     assert len(result.history["A_ur"]) == len(result.iterations) + 1 and 0 < len(result.iterations) < 100
 
@@ -102,7 +102,7 @@ def test_cli_exit_3_when_a_step_does_not_converge(monkeypatch, tmp_path, capsys)
 
     from cli import main
 
-    monkeypatch.setattr("smfem.solver.MAX_ITERATIONS", 2)
+    monkeypatch.setattr("smfem.solver.SolverOptions", lambda: SolverOptions(max_iterations=2))
     assert main(["run", "thick_cylinder", "--set", "plastic=true", "--out", str(tmp_path), "--quiet"]) == 3
     assert "did not converge" in capsys.readouterr().err
     assert 1 < len(pd.read_csv(tmp_path / "history.csv")) < 101

@@ -21,7 +21,7 @@ from reference_fem.mass import consistent_mass
 from reference_fem.newmark import march
 from reference_fem.probes import Probes
 from reference_fem.solver import _initial_velocity, _system
-from cases.timeint import newmark_constants
+from reference_fem.newmark import newmark_constants
 
 #: round-off level of a wall penetration (m), for a rod 1 m long
 PENETRATION = 1e-12

@@ -157,7 +157,7 @@ def test_html_renders_in_headless_chromium(tiny, tmp_path):
 def test_a_solver_that_cannot_run_a_case_gives_not_available(monkeypatch, tmp_path):
     import smfem.solver
 
-    def refuse(case, **_):
+    def refuse(case, *_, **__):
         raise UnsupportedCase("contact is not part of this version")
 
     monkeypatch.setattr(smfem.solver, "solve", refuse)

@@ -10,8 +10,9 @@ import pytest
 
 from cases import UnsupportedCase, get_case
 from reports.metrics import history_errors
-from smfem.contact import POINTS_PER_HARMONIC, ContactLayer
-from smfem.contact_run import contact_model
+from smfem.contact import ContactLayer
+from smfem.model import Model
+from smfem.options import SolverOptions
 from smfem.model import ModelError
 from smfem.solver import solve
 
@@ -39,12 +40,12 @@ def test_a_tilted_wall_asks_for_harmonics_and_3d():
 
 def test_the_layer_gap_follows_the_wall_around_the_circumference():
     case = tilted()
-    layer = ContactLayer(contact_model(case), 1e-4, case.material.E)
+    layer = ContactLayer(Model(case, nonlinear=True), 1e-4, case.material.E)
     # the cosine family only (the wall is symmetric about theta = 0), harmonics 0..5
     assert [str(m) for m in layer.model.modes] == [f"{l}c" for l in range(6)]
     R = 0.05
     r = R - layer.gap[:, 0] / SLOPE  # each layer point's radius, from its gap at theta = 0
-    assert layer.gap.shape == (2 * 5, POINTS_PER_HARMONIC * 6) and np.all((r > 0) & (r < R))
+    assert layer.gap.shape == (2 * 5, SolverOptions().layer_points_per_harmonic * 6) and np.all((r > 0) & (r < R))
     assert np.allclose(np.sort(r), np.sort(np.concatenate([np.arange(5) + 0.5 - 0.5 / 3**0.5,
                                                            np.arange(5) + 0.5 + 0.5 / 3**0.5])) * R / 5)
     assert np.allclose(layer.gap, SLOPE * (R - r[:, None] * np.cos(layer.x3)[None, :]), rtol=0, atol=1e-15)
