@@ -159,24 +159,3 @@ def element_stiffness(ops: ElementOperators, p: float, D: np.ndarray, q: float |
     k = np.einsum("eri,ers,esj->eij", L0, D, R0)
     k += (np.einsum("eri,ers,esj->eij", L1, D, R1) + np.einsum("eri,ers,esj->eij", L2, D, R2)) / 12.0
     return k * ops.sqrt_g[:, None, None]
-
-
-GAUSS_2 = np.array([-0.5, 0.5]) / np.sqrt(3.0)
-
-
-def element_stiffness_full(X: np.ndarray, body: str, p: float, D: np.ndarray) -> np.ndarray:
-    """Plain bilinear element with full 2 x 2 Gauss integration of every strain row.
-
-    Not used by the solver: it is the locking-prone baseline the moment scheme is compared with.
-    """
-    k = 0.0
-    for xi in GAUSS_2:
-        for eta in GAUSS_2:
-            N, dxi, deta = shape_functions(xi, eta)
-            J = np.stack([np.einsum("eia,i->ea", X, dxi), np.einsum("eia,i->ea", X, deta)], axis=2)
-            w = np.abs(np.linalg.det(J)) / 4.0
-            if body == RING:
-                w = w * np.einsum("ei,i->e", X[:, :, 0], N)
-            B = strain_operator(X, body, p, xi, eta)
-            k = k + np.einsum("eri,ers,esj->eij", B, D, B) * w[:, None, None]
-    return k

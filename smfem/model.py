@@ -45,9 +45,6 @@ class Model:
 
     Parameters
     ----------
-    refine, harmonics : override the case's values
-    scheme : ``'moment'`` (the solver's element) or ``'full'`` (fully integrated bilinear, for
-        comparison only)
     nonlinear : keep every mode the symmetry of the problem allows (plasticity couples them) and
         set up the x3 sample points for stresses
 
@@ -56,21 +53,17 @@ class Model:
     takes the coupling from the stresses instead.
     """
 
-    def __init__(self, case, refine: int | None = None, harmonics: int | None = None, scheme: str = "moment",
-                 nonlinear: bool = False):
-        if scheme not in ("moment", "full"):
-            raise ModelError(f"unknown element scheme {scheme!r}: 'moment' or 'full'")
+    def __init__(self, case, nonlinear: bool = False):
         self.case = case
         self.body = case.body
         self.length = case.length
-        self.scheme = scheme
-        self.mesh: SectionMesh = section_mesh(case.section, refine or case.refine)
+        self.mesh: SectionMesh = section_mesh(case.section, case.refine)
         self.ops = element.operators(self.mesh.element_x(), case.body, case.material.nu)
         mat = case.material
         self.D = isotropic_D(mat.E, mat.nu)
         self.rho = mat.rho
         self.inhomogeneous = bool(case.cutouts) and case.contrast < 1.0
-        n_harm = harmonics or case.harmonics
+        n_harm = case.harmonics
         families = ("c", "s") if case.body == RING else ("p",)
         candidates = fourier.modes(case.body, n_harm, families)
         Q = loads.load_amplitudes(case, self.mesh, candidates)
@@ -162,13 +155,7 @@ class Model:
         Dw = assembly.weighted_elasticity(self.D, self._integrals[i, j])
         p = fourier.wavenumber(self.modes[i], self.body, self.length)
         q = fourier.wavenumber(self.modes[j], self.body, self.length)
-        if self.scheme == "moment":
-            blocks = element.element_stiffness(self.ops, p, Dw, q)
-        else:
-            if i != j:
-                raise ModelError("the fully integrated comparison element is for decoupled modes only")
-            blocks = element.element_stiffness_full(self.mesh.element_x(), self.body, p, Dw)
-        return assembly.assemble(blocks, self.mesh.elements, self.mesh.n_nodes)
+        return assembly.assemble(element.element_stiffness(self.ops, p, Dw, q), self.mesh.elements, self.mesh.n_nodes)
 
     def full_mass(self, i: int, j: int) -> np.ndarray:
         """Unconstrained lumped mass diagonal (3 n_nodes,) of block ``(i, j)``."""

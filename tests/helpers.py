@@ -9,14 +9,45 @@ import numpy as np
 import scipy.sparse.linalg as sla
 
 from cases import get_case
-from cases.geometry import Axis, Pressure, Section, Support
+from cases.geometry import RING, Axis, Pressure, Section, Support
+from smfem import assembly, element, fourier
 from smfem.model import Model
 
+#: 2 x 2 Gauss points in the element's natural coordinates (-1/2 ... 1/2)
+GAUSS_2 = np.array([-0.5, 0.5]) / np.sqrt(3.0)
 
-def static_solution(case, **model_options):
-    """Static SMFEM solution: the model and the full nodal displacements (n_nodes, 3) per mode."""
-    model = Model(case, **model_options)
-    return model, [(s.T @ sla.spsolve(s.K.tocsc(), s.Q)).reshape(-1, 3) for s in model.systems]
+
+def element_stiffness_full(X: np.ndarray, body: str, p: float, D: np.ndarray) -> np.ndarray:
+    """Plain bilinear element with full 2 x 2 Gauss integration of every strain row: the
+    locking-prone baseline the moment scheme is compared with (never used by the solver)."""
+    k = 0.0
+    for xi in GAUSS_2:
+        for eta in GAUSS_2:
+            N, dxi, deta = element.shape_functions(xi, eta)
+            J = np.stack([np.einsum("eia,i->ea", X, dxi), np.einsum("eia,i->ea", X, deta)], axis=2)
+            w = np.abs(np.linalg.det(J)) / 4.0
+            if body == RING:
+                w = w * np.einsum("ei,i->e", X[:, :, 0], N)
+            B = element.strain_operator(X, body, p, xi, eta)
+            k = k + np.einsum("eri,ers,esj->eij", B, D, B) * w[:, None, None]
+    return k
+
+
+def full_integration_stiffness(model: Model, i: int):
+    """Mode ``i``'s reduced stiffness with the fully integrated element (decoupled modes)."""
+    mesh, s = model.mesh, model.systems[i]
+    Dw = assembly.weighted_elasticity(model.D, model._integrals[i, i])
+    p = fourier.wavenumber(s.mode, model.body, model.length)
+    K = assembly.assemble(element_stiffness_full(mesh.element_x(), model.body, p, Dw), mesh.elements, mesh.n_nodes)
+    return (s.T.T @ K @ s.T).tocsr()
+
+
+def static_solution(case, scheme: str = "moment"):
+    """Static SMFEM solution: the model and the full nodal displacements (n_nodes, 3) per mode;
+    ``scheme='full'``: with the fully integrated element instead of the moment scheme."""
+    model = Model(case)
+    stiffness = [s.K if scheme == "moment" else full_integration_stiffness(model, i) for i, s in enumerate(model.systems)]
+    return model, [(s.T @ sla.spsolve(K.tocsc(), s.Q)).reshape(-1, 3) for s, K in zip(model.systems, stiffness)]
 
 
 def nearest_node(model, x1, x2) -> int:
