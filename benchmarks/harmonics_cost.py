@@ -53,8 +53,11 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--counts", type=int, nargs="+", default=[25, 50, 100, 200, 400, 800])
     ap.add_argument("--set", dest="sets", action="append", default=["refine=2", "dt=1e-5"])
+    ap.add_argument("--tiny", action="store_true", help="a few steps of the smallest settings (the tests run every benchmark so)")
     args = ap.parse_args(argv)
     sets = parse_sets(args.sets)
+    if args.tiny:
+        args.counts, sets = [4, 8], dict(sets, refine=1, t_end=1e-4)
     print(f"thick_cylinder {sets}")
     for load in ("two patches", "one patch"):
         rows = measure(args.counts, sets, load)

@@ -37,11 +37,11 @@ def table(runs: dict) -> list[dict]:
         end = min(run.history["t"].iloc[-1] for run in done.values())
         grid = next(iter(done.values())).history["t"].to_numpy()
         grid = grid[grid <= end * (1 + 1e-12)]
-        for probe in get_case(name).probe_names:
+        for probe in get_case(name).probe_names:  # the same probes whatever the window
             q = {r: np.interp(grid, run.history["t"], run.history[probe]) for r, run in done.items()}
             rs = sorted(q)
             top = np.abs(q[rs[-1]]).max()
-            diffs = [float(np.abs(q[b] - q[a]).max() / top) for a, b in zip(rs, rs[1:])]
+            diffs = [float(np.abs(q[b] - q[a]).max() / top) if top else math.nan for a, b in zip(rs, rs[1:])]
             orders = [order_of([1 / r for r in rs[i:i + 3]], diffs[i], diffs[i + 1]) for i in range(len(diffs) - 1)]
             rows.append({"case": name, "probe": probe, "levels": rs, "end_s": float(end),
                          "differences": diffs, "orders": orders,
@@ -49,12 +49,16 @@ def table(runs: dict) -> list[dict]:
     return rows
 
 
-def main():
+def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--levels", type=int, nargs="+", default=[1, 2, 3, 4])
     parser.add_argument("--cache", default="out/benchmarks/runs")
-    args = parser.parse_args()
-    jobs = {(name, r): Job.make(name, REF2D, {"refine": r}) for name in CASES for r in args.levels}
+    parser.add_argument("--tiny", action="store_true", help="a few steps of the smallest settings (the tests run every benchmark so)")
+    args = parser.parse_args(argv)
+    base = lambda name: {"t_end": 3 * get_case(name).dt} if args.tiny else {}
+    if args.tiny:
+        args.levels = [1, 2, 3]
+    jobs = {(name, r): Job.make(name, REF2D, {**base(name), "refine": r}) for name in CASES for r in args.levels}
     done, executed, _ = run_cached(list(jobs.values()), RunCache(Path(args.cache)), workers=2)
     runs = {key: done[job] for key, job in jobs.items()}
     for key, run in runs.items():

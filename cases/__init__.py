@@ -1,4 +1,4 @@
-"""The five verification scenes as data (see shared/CASES.md). No solver imports here.
+"""The five verification scenes as data (docs/scenes.md). No solver imports here.
 
 >>> from cases import get_case
 >>> case = get_case("thick_cylinder", {"dt": 1e-5})
@@ -13,7 +13,7 @@ CASES = {m.NAME: m for m in _MODULES}
 
 
 def get_case(name: str, overrides: dict | None = None) -> Case:
-    """Build case ``name`` with validated ``overrides`` (keys and values as in CONTRACT.md)."""
+    """Build case ``name`` with validated ``overrides`` (keys and values: docs/scenes.md)."""
     if name not in CASES:
         raise ParameterError(f"unknown case {name!r}: choose one of {', '.join(CASES)}")
     module = CASES[name]

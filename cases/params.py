@@ -89,7 +89,7 @@ class Spec:
         return value
 
 
-#: keys every case accepts (CONTRACT.md), plus ``dim`` for the reference solver
+#: keys every case accepts (docs/contract.md), plus ``dim`` for the reference solver
 COMMON = {
     "dt": Spec(float, 1e-12, 1e3, help="time step, s"),
     "t_end": Spec(float, 1e-12, 1e6, help="end of the time window, s"),

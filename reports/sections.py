@@ -2,7 +2,7 @@
 
 A section is a title and a list of blocks (paragraph, sub-heading, list, table, figure, link).
 :data:`SECTIONS` is the document's outline; :data:`EXTRA_SECTIONS` is the place for sections
-added by later work (the stability study of issue 7 appends its builder there), rendered
+added by later work (the stability study appends its builder there), rendered
 after the case sections and before the methods.
 """
 
@@ -217,7 +217,7 @@ def methods(ctx: ReportContext) -> list[Section]:
     ])])]
 
 
-#: sections added by later work; each is ``builder(ctx) -> list[Section]`` (issue 7: stability)
+#: sections added by later work; each is ``builder(ctx) -> list[Section]`` (the stability section)
 EXTRA_SECTIONS: list = []
 #: the document's outline
 SECTIONS = [overview, headline, cases]

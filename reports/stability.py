@@ -1,4 +1,4 @@
-"""The report's stability section (issue 7): the figures of :mod:`reports.stability_study`.
+"""The report's stability section: the figures of :mod:`reports.stability_study`.
 
 The table takes about a minute, so it is cached beside the runs, by the code version of both
 solvers; a tiny (test) study leaves the section out.

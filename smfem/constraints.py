@@ -1,7 +1,7 @@
 """Per-mode constraints: supports, components a mode does not carry, and regularity on the axis.
 
 Each mode gets a sparse map ``T`` (n_full, n_free) with ``u_full = T u_free``. Axis nodes of a
-ring (r = 0) follow the regularity of each harmonic (METHOD.md): l = 0: u_r = u_theta = 0;
+ring (r = 0) follow the regularity of each harmonic (docs/method.md): l = 0: u_r = u_theta = 0;
 l = 1: u_z = 0 and u_theta = -u_r (a lateral translation of the axis point); l >= 2: all zero.
 """
 

@@ -11,7 +11,7 @@ A mode is one harmonic ``l`` of one family:
 
 Strain rows ``[e11, e22, e33, g12, g13, g23]`` of a mode vary along x3 like the in-plane
 components (``psi1``) for rows 0-3 and like the out-of-plane one (``psi3``) for rows 4-5, with
-one strain operator per ``l`` shared by both ring families (METHOD.md).
+one strain operator per ``l`` shared by both ring families (docs/method.md).
 """
 
 from __future__ import annotations

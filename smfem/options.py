@@ -23,8 +23,8 @@ class SolverOptions:
     direct : force (True) or forbid (False) the direct coupled solve of an elastic
         inhomogeneous case; None chooses by ``direct_max_nonzeros``
     layer_points_per_harmonic : contact-layer points around the circumference per harmonic kept
-        (2 integrate the products of harmonics exactly; the edge of a contact zone needs more:
-        tilted rod, 6 harmonics, against 16: 4 give contact_p 0.9 % off, 8 give 0.24 %)
+        (2 integrate the products of harmonics exactly; the edge of a contact zone needs more,
+        benchmarks/README.md)
     max_state_iterations : contact-layer state iterations allowed per step
     """
 

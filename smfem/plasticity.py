@@ -11,7 +11,7 @@ surface (radial return), which for ideal plasticity is exactly Wilkins' formula
 Two plastic measures are tracked: the accumulated ``alpha = int sqrt(2/3 d eps_p : d eps_p)``,
 which drives hardening and never decreases, and the plastic strain tensor ``eps_p`` (Voigt,
 engineering shears), whose intensity ``sqrt(2/3 eps_p : eps_p)`` is what probes report as
-``peps`` (CASES.md); it can fall under reversed flow.
+``peps`` (docs/scenes.md); it can fall under reversed flow.
 """
 
 from __future__ import annotations

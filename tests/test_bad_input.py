@@ -1,4 +1,4 @@
-"""Bad input (CONTRACT.md): exit status 2, one clear line, no traceback, nothing written; and
+"""Bad input (docs/contract.md): exit status 2, one clear line, no traceback, nothing written; and
 any valid set of parameters gives finite histories or a clear error.
 
 The mistakes are generated from each case's parameter specs, so a new key is covered as soon

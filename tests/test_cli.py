@@ -1,4 +1,4 @@
-"""The command line of CONTRACT.md."""
+"""The command line of docs/contract.md."""
 
 import json
 import subprocess

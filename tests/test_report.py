@@ -1,4 +1,4 @@
-"""The verification report (issue 6): a tiny study end to end, the cache, dask, the metrics."""
+"""The verification report: a tiny study end to end, the cache, dask, the metrics."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Stiff and extreme settings (issue 7): unconditional stability, near incompressibility, thin
+"""Stiff and extreme settings: unconditional stability, near incompressibility, thin
 domes, many harmonics. The figures come from :mod:`reports.stability_study`, which the report's
 stability section prints as well.
 """

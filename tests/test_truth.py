@@ -1,4 +1,4 @@
-"""Truths (issue 12): the reference's harmonic model, its exact time integration, and the
+"""Truths: the reference's harmonic model, its exact time integration, and the
 truths of the report checked against exact-in-time solutions built here, independently."""
 
 from __future__ import annotations
