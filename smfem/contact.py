@@ -88,6 +88,62 @@ class LayerStates(NamedTuple):
         return self.kind.tobytes() + self.direction.tobytes() + self.kappa.tobytes()
 
 
+# -- the layer's law, point by point: pure functions of arrays (n_points, n_x3, ...) ----------
+def layer_states(strain: np.ndarray, pre_closure: np.ndarray, slip: np.ndarray, E: float, G: float,
+                 f: float) -> LayerStates:
+    """State of every point: open where the layer would carry normal tension (closure
+    ``e_n + g / h >= 0``), else stick while the trial shear ``G (gamma - slip)`` stays within
+    ``f |sigma_n|``, else slip (always, without friction); the slip direction and ``kappa``."""
+    closure = strain[..., NORMAL] + pre_closure
+    sigma_n = E * closure
+    tau = G * (strain[..., SHEAR] - slip)  # trial: no further slip
+    size = np.linalg.norm(tau, axis=-1)
+    limit = f * np.abs(sigma_n)
+    kind = np.where((f > 0) & (size <= limit), STICK, SLIP)
+    kind = np.where(closure >= 0, OPEN, kind)
+    slipping = (kind == SLIP) & (size > 0) & (f > 0)  # without friction no direction
+    safe = np.where(slipping, size, 1.0)
+    direction = np.where(slipping[..., None], tau / safe[..., None], 0.0)
+    kappa = np.where(slipping, limit / safe, 0.0)
+    return LayerStates(kind, direction, kappa)
+
+
+def layer_tangent(states: LayerStates, E: float, G: float, f: float) -> np.ndarray:
+    """(n_points, n_x3, 6, 6) layer elasticity (the consistent tangent) of each state.
+
+    Slip: ``tau = -f sigma_n d`` with ``d`` the direction of the trial stress (18)-(19),
+    linearized about the current iterate: ``dtau/de_n = -f E d`` and
+    ``dtau/dgamma = kappa G (I - d d')`` (the direction turns with the tangential strain;
+    frozen, it flips between iterations where the slip turns).
+    """
+    kind, d = states.kind, states.direction
+    D = np.zeros(kind.shape + (6, 6))
+    D[..., NORMAL, NORMAL] = np.where(kind != OPEN, E, 0.0)
+    slip = kind == SLIP
+    for k, row in enumerate(SHEAR):
+        D[..., row, NORMAL] = np.where(slip, -f * E * d[..., k], 0.0)
+        for m, col in enumerate(SHEAR):
+            turn = states.kappa * G * ((k == m) - d[..., k] * d[..., m])
+            D[..., row, col] = np.where(kind == STICK, G * (k == m), np.where(slip, turn, 0.0))
+    return D
+
+
+def offset_strain(states: LayerStates, pre_closure: np.ndarray, slip: np.ndarray) -> np.ndarray:
+    """(n_points, n_x3, 6) strain the layer adds to the displacement's: the gap (``g / h``) and
+    the committed slip of closed points."""
+    e = np.zeros(states.kind.shape + (6,))
+    e[..., NORMAL] = pre_closure
+    e[..., SHEAR] = np.where((states.kind != OPEN)[..., None], -slip, 0.0)
+    return e
+
+
+def slip_after(strain: np.ndarray, states: LayerStates, sigma: np.ndarray, slip: np.ndarray, G: float) -> np.ndarray:
+    """The slip a converged step leaves: slipping points carry the part of their shear the
+    stress does not, open points release all of it, sticking points keep theirs."""
+    slip = np.where((states.kind == SLIP)[..., None], strain[..., SHEAR] - sigma[..., SHEAR] / G, slip)
+    return np.where((states.kind == OPEN)[..., None], strain[..., SHEAR], slip)
+
+
 class ContactError(StepFailed):
     """Contact states that do not settle, or a face pushed through the wall."""
 
@@ -160,6 +216,7 @@ class ContactLayer:
         self.B = np.stack([(B0[self.element] + xi[:, None, None] * B1[self.element])[..., 6:] for B0, B1, _ in B])
         r = 0.5 * (x[seg[:, 0], 0] + x[seg[:, 1], 0])[self.element] + xi * (x[seg[:, 1], 0] - x[seg[:, 0], 0])[self.element]
         self.gap = wall.gap_at(r[:, None] * np.cos(self.x3)[None, :], x[face, 0].max())  # (n_points, n_x3)
+        self.pre_closure = self.gap / self.h  # the gap as a normal pre-strain
         self.area = 0.5 * self.ops.sqrt_g[self.element, None] * self.w[None, :]  # quadrature weight of every point
         shape = (len(self.element), n_x3)
         self.slip_strain = np.zeros(shape + (2,))  # committed tangential slip per point
@@ -181,48 +238,16 @@ class ContactLayer:
         amp = np.einsum("ierk,iek->ier", self.B, self.face_values(u)[:, self.local])
         return np.einsum("iqr,ier->eqr", self.psi, amp)
 
-    # -- constitutive state -------------------------------------------------------------------
+    # -- constitutive state (the law: :func:`layer_states`, :func:`layer_tangent`) -------------
     def states_of(self, strain: np.ndarray) -> LayerStates:
         """State of every point for a strain (the committed slip taken into account)."""
-        closure = strain[..., NORMAL] + self.gap / self.h
-        sigma_n = self.E * closure
-        tau = self.G * (strain[..., SHEAR] - self.slip_strain)  # trial: no further slip
-        size = np.linalg.norm(tau, axis=-1)
-        limit = self.f * np.abs(sigma_n)
-        kind = np.where((self.f > 0) & (size <= limit), STICK, SLIP)
-        kind = np.where(closure >= 0, OPEN, kind)
-        slipping = (kind == SLIP) & (size > 0) & (self.f > 0)  # without friction no direction
-        safe = np.where(slipping, size, 1.0)
-        direction = np.where(slipping[..., None], tau / safe[..., None], 0.0)
-        kappa = np.where(slipping, limit / safe, 0.0)
-        return LayerStates(kind, direction, kappa)
+        return layer_states(strain, self.pre_closure, self.slip_strain, self.E, self.G, self.f)
 
     def D(self, states: LayerStates) -> np.ndarray:
-        """(n_points, n_x3, 6, 6) layer elasticity (the consistent tangent) of each state.
-
-        Slip: ``tau = -f sigma_n d`` with ``d`` the direction of the trial stress (18)-(19),
-        linearized about the current iterate: ``dtau/de_n = -f E d`` and
-        ``dtau/dgamma = kappa G (I - d d')`` (the direction turns with the tangential strain;
-        frozen, it flips between iterations where the slip turns).
-        """
-        kind, d = states.kind, states.direction
-        D = np.zeros(kind.shape + (6, 6))
-        D[..., NORMAL, NORMAL] = np.where(kind != OPEN, self.E, 0.0)
-        slip = kind == SLIP
-        for k, row in enumerate(SHEAR):
-            D[..., row, NORMAL] = np.where(slip, -self.f * self.E * d[..., k], 0.0)
-            for m, col in enumerate(SHEAR):
-                turn = states.kappa * self.G * ((k == m) - d[..., k] * d[..., m])
-                D[..., row, col] = np.where(kind == STICK, self.G * (k == m), np.where(slip, turn, 0.0))
-        return D
+        return layer_tangent(states, self.E, self.G, self.f)
 
     def offset_strain(self, states: LayerStates) -> np.ndarray:
-        """(n_points, n_x3, 6) strain the layer adds to the displacement's: the gap and the
-        committed slip."""
-        e = np.zeros(states.kind.shape + (6,))
-        e[..., NORMAL] = self.gap / self.h
-        e[..., SHEAR] = np.where((states.kind != OPEN)[..., None], -self.slip_strain, 0.0)
-        return e
+        return offset_strain(states, self.pre_closure, self.slip_strain)
 
     def stress(self, strain: np.ndarray, states: LayerStates) -> np.ndarray:
         return np.einsum("eqrs,eqs->eqr", self.D(states), strain + self.offset_strain(states))
@@ -249,12 +274,9 @@ class ContactLayer:
         return np.bincount(self._rows, per.ravel(), minlength=self.size).reshape(len(self.C), len(self.F))
 
     def commit(self, strain: np.ndarray, states: LayerStates) -> None:
-        """End of a converged step: slipping points carry their slip; open points release it;
-        the states become the next step's first guess."""
-        sigma = self.stress(strain, states)
-        slipping = (states.kind == SLIP)[..., None]
-        self.slip_strain = np.where(slipping, strain[..., SHEAR] - sigma[..., SHEAR] / self.G, self.slip_strain)
-        self.slip_strain = np.where((states.kind == OPEN)[..., None], strain[..., SHEAR], self.slip_strain)
+        """End of a converged step: the slip it leaves (:func:`slip_after`); the states become
+        the next step's first guess."""
+        self.slip_strain = slip_after(strain, states, self.stress(strain, states), self.slip_strain, self.G)
         self.states = states
 
     # -- what a run reports ---------------------------------------------------------------------
@@ -401,7 +423,7 @@ class ContactSystem:
         else:
             raise ContactError(f"step {step_index} (t = {t:.6g} s): contact states did not settle in "
                                f"{self.max_state_iterations} iterations (state chattering)")
-        closure = -(strain[..., NORMAL] + layer.gap / layer.h)
+        closure = -(strain[..., NORMAL] + layer.pre_closure)
         self.max_closure = max(self.max_closure, float(closure.max()))
         if closure.max() >= 1.0:
             raise ContactError(f"step {step_index} (t = {t:.6g} s): the face went through the wall (layer "
