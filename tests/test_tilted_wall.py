@@ -79,6 +79,7 @@ def test_more_harmonics_change_little(smfem_run):
         assert history_errors(r6.t, r6.history[probe], r12.t, r12.history[probe])[0] < 0.05, probe
 
 
+@pytest.mark.slow  # 50 s (the 3D reference); `python benchmarks/tilted_wall.py` prints the same comparison
 def test_with_friction_histories_and_dissipation_agree_with_the_3d_reference():
     """Stick and slip around the circumference, the slip in two tangential directions (SMFEM:
     the layer's Coulomb cone; reference: Lagrange multipliers with Alart-Curnier states).
