@@ -41,7 +41,7 @@ def main(argv=None):
                   f"max {r.info['iterations_max']}, cpu {cpu:.2f} s; per iteration (ms): "
                   + ", ".join(f"{k} {v:.3f}" for k, v in per.items()) + f"  [{r.info['solve'][:40]}]")
     for omega in (1.0,) if tiny else (0.8, 1.0, 1.2, 1.5):
-        r, cpu = run("thick_cylinder", SolverOptions(relaxation=omega), plastic=True, **window("thick_cylinder"))
+        r, cpu = run("thick_cylinder", SolverOptions(sweep="sor", relaxation=omega), plastic=True, **window("thick_cylinder"))
         print(f"omega {omega}: thick_cylinder plastic iterations mean {r.info['iterations_mean']:.2f} "
               f"max {r.info['iterations_max']}, cpu {cpu:.2f} s")
     for direct in (True, False):

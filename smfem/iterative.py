@@ -57,8 +57,11 @@ class BlockIterative:
     dt : time step, s
     options : relaxation (omega of the block SOR), tolerance (relative change of the amplitudes
         that ends the iterations) and the iteration limit
-    coupled : ``(K, M)`` of the whole coupled elastic system, to iterate with it instead of the
-        diagonal blocks
+    coupled : ``(K, M)`` of all harmonics stacked (``M`` a sparse matrix where the mass
+        couples them, else the lumped diagonal), to iterate with one solve of all harmonics
+        instead of the block sweep: the whole coupled elastic system where the material varies
+        along x3, the block-diagonal one where it does not (then the sweep is block Jacobi in
+        exact arithmetic anyway: the harmonics do not couple through the stiffness)
     """
 
     def __init__(self, model, dt: float, options: SolverOptions, coupled: tuple | None = None):
@@ -72,9 +75,10 @@ class BlockIterative:
             self.lu = [sla.splu((s.K + sp.diags(self.c.a0 * s.M)).tocsc()) for s in S]
             self.coupled_lu = None
         else:
-            # the whole coupled elastic K + a0 M as the iteration matrix: all harmonics at once
+            # the stacked elastic K + a0 M as the iteration matrix: all harmonics at once
             K, self.M = coupled
-            self.coupled_lu = sla.splu((K + self.c.a0 * self.M).tocsc())
+            a0M = sp.diags(self.c.a0 * self.M) if isinstance(self.M, np.ndarray) else self.c.a0 * self.M
+            self.coupled_lu = sla.splu((K + a0M).tocsc())
             self.Q = np.concatenate([s.Q for s in S])
         self.factorizations = len(S) if coupled is None else 1
         self.mass_coupling = {i: [(j, m[1]) for (a, j), m in model.coupling.items() if a == i] for i in range(len(S))}
@@ -128,7 +132,8 @@ class BlockIterative:
             if self.coupled_lu is not None:
                 t0 = tick()
                 x, p = np.concatenate(new), np.concatenate(predicted)
-                r = self.Q - pts.forces(sigma) - c.a0 * (self.M @ (x - p))
+                r = self.Q - pts.forces(sigma) - c.a0 * (self.M * (x - p) if isinstance(self.M, np.ndarray)
+                                                         else self.M @ (x - p))
                 t1 = tick()
                 du = self.coupled_lu.solve(r)
                 self.timings["projection"] += t1 - t0

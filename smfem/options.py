@@ -14,6 +14,11 @@ class SolverOptions:
     """
     Attributes
     ----------
+    sweep : how a plastic step's iterations solve for the harmonics: ``'auto'`` solves all of
+        them at once with the stacked elastic matrix (block-diagonal for a body homogeneous along
+        x3, the whole coupled system where the material varies and it has at most
+        ``direct_max_nonzeros`` nonzeros), else the paper's block SOR; ``'sor'``: the paper's
+        block SOR over the harmonics always (its iteration counts)
     relaxation : omega of the block SOR over the harmonics (1: Gauss-Seidel)
     tolerance : relative change of the amplitudes that ends a step's iterations; None takes the
         case's ``tol``
@@ -28,6 +33,7 @@ class SolverOptions:
     max_state_iterations : contact-layer state iterations allowed per step
     """
 
+    sweep: str = "auto"
     relaxation: float = 1.0
     tolerance: float | None = None
     max_iterations: int = 200
@@ -38,3 +44,7 @@ class SolverOptions:
 
     def tolerance_for(self, case) -> float:
         return self.tolerance if self.tolerance is not None else case.params["tol"]
+
+    def __post_init__(self):
+        if self.sweep not in ("auto", "sor"):
+            raise ValueError(f"sweep={self.sweep!r}: 'auto' or 'sor'")

@@ -87,11 +87,13 @@ def _system(case, options: SolverOptions):
         return model, LinearSystem(K, M, Q, case.dt), how
     if not plastic:  # elastic but too large to factorize whole: the iterative path
         model = Model(case, nonlinear=True)
-    system = BlockIterative(model, case.dt, options, coupled=stacked(model)[:2] if use_direct else None)
-    how = ("iterative (13)-(16) with the whole coupled elastic system as iteration matrix" if use_direct
-           else f"block-iterative (13)-(16): block SOR over {len(model.systems)} harmonics, "
-                f"omega {options.relaxation:g}")
-    return model, system, how
+    if options.sweep == "auto" and (use_direct or not coupled):
+        how = ("iterative (13)-(16) with the whole coupled elastic system as iteration matrix" if coupled else
+               f"iterative (13)-(16), all {len(model.systems)} harmonics in one block-diagonal solve per "
+               f"iteration (they do not couple through the stiffness)")
+        return model, BlockIterative(model, case.dt, options, coupled=stacked(model)[:2]), how
+    how = f"block-iterative (13)-(16): block SOR over {len(model.systems)} harmonics, omega {options.relaxation:g}"
+    return model, BlockIterative(model, case.dt, options), how
 
 
 def _run(case, model, system, how, progress, with_fields, cpu0) -> RunResult:
