@@ -64,6 +64,11 @@ class ElementOperators:
     rotation: np.ndarray
     free_ratio: float
 
+    def subset(self, elements: np.ndarray) -> "ElementOperators":
+        """The operators of some elements only."""
+        return ElementOperators(tuple(a[elements] for a in self.Ba), tuple(b[elements] for b in self.Bb),
+                                self.sqrt_g[elements], self.rotation[elements], self.free_ratio)
+
     def at(self, p: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(B0, B1, B2)`` for wavenumber ``p``: the rows the scheme drops are zero, except the
         free normal strain gradients e11,1 and e22,2."""

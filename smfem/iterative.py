@@ -33,6 +33,30 @@ class NotConverged(StepFailed):
     """A time step did not converge within the allowed iterations."""
 
 
+class Anderson:
+    """Anderson acceleration of the fixed point ``x -> x + f(x)`` (``f`` the correction one
+    elastic solve gives): the next iterate combines the last ``memory`` ones so that the
+    linearized correction is least (Walker & Ni 2011, type II). The stopping test stays the
+    size of the plain correction ``f``."""
+
+    def __init__(self, memory: int):
+        self.memory, self.dX, self.dF, self.last = memory, [], [], None
+
+    def next(self, x: np.ndarray, f: np.ndarray) -> np.ndarray:
+        if self.last is not None:
+            self.dX.append(x - self.last[0])
+            self.dF.append(f - self.last[1])
+            if len(self.dX) > self.memory:
+                self.dX.pop(0), self.dF.pop(0)
+        self.last = (x, f)
+        if not self.dX:
+            return x + f
+        F = np.column_stack(self.dF)
+        gamma = np.linalg.lstsq(F, f, rcond=1e-12)[0]
+        step = x + f - (np.column_stack(self.dX) + F) @ gamma
+        return step if np.isfinite(step).all() else x + f
+
+
 @dataclass
 class PointState:
     """Committed material state at the sample points (n_elements, 4, n_x3, ...): stresses,
@@ -65,7 +89,7 @@ class BlockIterative:
     """
 
     def __init__(self, model, dt: float, options: SolverOptions, coupled: tuple | None = None):
-        self.model, self.omega = model, options.relaxation
+        self.model, self.omega, self.memory = model, options.relaxation, options.anderson
         self.tol, self.max_iter = options.tolerance_for(model.case), options.max_iterations
         self.c = Constants.of(dt)
         self.points = SamplePoints(model)
@@ -127,6 +151,7 @@ class BlockIterative:
         predicted, u = self.split(predicted), self.split(u)
         new = [ui.copy() for ui in u]
         sigma = self.state.sigma.copy()
+        anderson = Anderson(self.memory) if self.memory and self.coupled_lu is not None else None
         for iteration in range(1, self.max_iter + 1):
             change2 = 0.0
             if self.coupled_lu is not None:
@@ -138,7 +163,7 @@ class BlockIterative:
                 du = self.coupled_lu.solve(r)
                 self.timings["projection"] += t1 - t0
                 self.timings["solves"] += tick() - t1
-                new = np.split(x + du, pts.offsets[1:-1])
+                new = np.split(x + du if anderson is None else anderson.next(x, du), pts.offsets[1:-1])
                 change2 = du @ du
             for i, s in enumerate(S if self.coupled_lu is None else ()):
                 t0 = tick()

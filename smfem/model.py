@@ -82,6 +82,10 @@ class Model:
             active = [i for i, m in enumerate(candidates) if m in allowed]
         if self.inhomogeneous:
             I = inhomogeneity.coupling_integrals(candidates, case, self.factor, self.x3, self.x3_weights)
+            # outside the cut-outs f = 1 and different harmonics are orthogonal along x3: their
+            # integrals are round-off there; exact zeros keep the coupled matrix sparse
+            outside = (self.factor == 1.0).all(axis=1)
+            I[~np.eye(len(candidates), dtype=bool)[:, :, None] & outside[None, None, :]] = 0.0
             if not nonlinear:
                 # an isotropic D and the lumped mass pair psi1 with psi1 and psi3 with psi3 only
                 strength = np.maximum(np.abs(I[..., 0, 0]), np.abs(I[..., 1, 1])).max(axis=2)
@@ -102,7 +106,9 @@ class Model:
         for (i, j) in self._integrals:
             if i != j:
                 Ti, Tj = self.systems[i].T, self.systems[j].T
-                self.coupling[i, j] = (None, (Ti.T @ sp.diags(self.full_mass(i, j)) @ Tj).tocsr())
+                mass = (Ti.T @ sp.diags(self.full_mass(i, j)) @ Tj).tocsr()
+                mass.eliminate_zeros()
+                self.coupling[i, j] = (None, mass)
 
     def mass_matrix(self):
         """Stacked mass of all modes: the diagonal (n,) when the modes decouple, else the sparse
@@ -151,11 +157,15 @@ class Model:
         return out
 
     def full_stiffness(self, i: int, j: int) -> sp.csr_matrix:
-        """Unconstrained stiffness block (3 n_nodes square) coupling active modes ``i`` and ``j``."""
-        Dw = assembly.weighted_elasticity(self.D, self._integrals[i, j])
+        """Unconstrained stiffness block (3 n_nodes square) coupling active modes ``i`` and ``j``:
+        over the elements where their x3 integral is not zero (the cut-outs', for i != j)."""
+        I = self._integrals[i, j]
+        live = np.flatnonzero(np.abs(I).reshape(len(I), -1).max(axis=1) > 0) if i != j else slice(None)
+        Dw = assembly.weighted_elasticity(self.D, I[live])
         p = fourier.wavenumber(self.modes[i], self.body, self.length)
         q = fourier.wavenumber(self.modes[j], self.body, self.length)
-        return assembly.assemble(element.element_stiffness(self.ops, p, Dw, q), self.mesh.elements, self.mesh.n_nodes)
+        ops = self.ops if i == j else self.ops.subset(live)
+        return assembly.assemble(element.element_stiffness(ops, p, Dw, q), self.mesh.elements[live], self.mesh.n_nodes)
 
     def full_mass(self, i: int, j: int) -> np.ndarray:
         """Unconstrained lumped mass diagonal (3 n_nodes,) of block ``(i, j)``."""

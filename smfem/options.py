@@ -19,6 +19,8 @@ class SolverOptions:
         x3, the whole coupled system where the material varies and it has at most
         ``direct_max_nonzeros`` nonzeros), else the paper's block SOR; ``'sor'``: the paper's
         block SOR over the harmonics always (its iteration counts)
+    anderson : iterates an Anderson acceleration of the stacked-solve iterations remembers (0:
+        the plain iteration, the paper's)
     relaxation : omega of the block SOR over the harmonics (1: Gauss-Seidel)
     tolerance : relative change of the amplitudes that ends a step's iterations; None takes the
         case's ``tol``
@@ -34,6 +36,7 @@ class SolverOptions:
     """
 
     sweep: str = "auto"
+    anderson: int = 0
     relaxation: float = 1.0
     tolerance: float | None = None
     max_iterations: int = 200

@@ -110,3 +110,19 @@ def test_contrast_1e4_against_1e8_changes_the_probes_less_than_half_a_percent():
     b = solve(get_case("notched_cylinder", {"contrast": 1e-8}), with_fields=False)
     assert a.converged and b.converged and b.info["iterations_max"] < 20
     assert relative_error(a.history, b.history) < 0.005
+
+
+def test_the_harmonic_coupling_is_exactly_sparse():
+    """Different harmonics couple only through the cut-out elements (elsewhere they are
+    orthogonal along x3): the off-diagonal blocks hold entries of those elements' dofs only,
+    and no stored zeros."""
+    from smfem.assembly import element_dofs
+
+    model = Model(get_case("notched_strip", {"harmonics": 12}), nonlinear=True)
+    model.assemble_coupled_stiffness()
+    cut = np.flatnonzero((model.factor != 1.0).any(axis=1))
+    allowed = set(element_dofs(model.mesh.elements[cut]).ravel())
+    assert 0 < len(cut) < model.mesh.n_elements / 2 and model.coupling
+    for (i, j), (K, M) in model.coupling.items():
+        assert set(np.unique(model.full_stiffness(i, j).nonzero()[0])) <= allowed
+        assert np.all(K.data != 0) and np.all(M.data != 0)

@@ -133,3 +133,14 @@ def test_stacked_solve_of_a_homogeneous_body_equals_the_papers_block_sweep():
     assert stacked.iterations == sweep.iterations and max(stacked.history["peps_max"]) > 1e-3
     for name, h in stacked.history.items():
         assert np.abs(h - sweep.history[name]).max() <= 1e-10 * np.abs(sweep.history[name]).max(), name
+
+
+def test_anderson_acceleration_reaches_the_same_solution_in_fewer_iterations():
+    """The notched strip's plastic iterations at a tight tolerance: Anderson acceleration
+    (SolverOptions(anderson=5)) against the plain iteration. Measured (40 harmonics, 40 steps):
+    6.8 against 12.5 iterations per step, probes equal to 2e-6 (peps_top 1.5e-4)."""
+    case = get_case("notched_strip", {"tol": 1e-8, "t_end": 1.28e-4, "harmonics": 40})
+    fast, plain = solve(case, SolverOptions(anderson=5), with_fields=False), solve(case, with_fields=False)
+    assert fast.converged and fast.info["iterations_mean"] < 0.6 * plain.info["iterations_mean"]
+    for name, h in plain.history.items():
+        assert np.abs(fast.history[name] - h).max() <= 1e-3 * np.abs(h).max(), name
