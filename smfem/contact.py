@@ -43,12 +43,12 @@ from typing import NamedTuple
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as sla
 
 from cases.geometry import RING
 
 from . import element, fourier
 from .fourier import Mode
+from .linalg import factorize_spd
 from .model import ModelError
 from .newmark import Constants, State, StepFailed
 from .options import SolverOptions
@@ -340,7 +340,7 @@ class ContactSystem:
         self.M = np.concatenate([s.T.multiply(s.T).T @ m for s, m in zip(systems, self.m_full)])
         self.c = Constants.of(dt)
         self.offsets = layer.offsets
-        self.lus = [sla.splu((K + sp.diags(self.c.a0 * M)).tocsc()) for K, M in zip(self.K, self.blocks(self.M))]
+        self.lus = [factorize_spd(K + sp.diags(self.c.a0 * M)) for K, M in zip(self.K, self.blocks(self.M))]
         self.factorizations = len(self.lus)
         self.Z = [lu.solve(C.T.toarray()) for lu, C in zip(self.lus, layer.C)]
         nF = len(layer.F)

@@ -1,0 +1,35 @@
+"""SMFEM's factorization of SPD step matrices: banded Cholesky where the band is narrow."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as sla
+
+from cases import get_case
+from smfem.linalg import BandedCholesky, factorize_spd
+from smfem.model import Model
+from smfem.newmark import Constants
+
+
+def test_a_rod_matrix_goes_banded_and_solves_like_lu():
+    case = get_case("rod_impact", {"refine": 2})
+    s = Model(case).systems[0]
+    A = s.K + sp.diags(Constants.of(case.dt).a0 * s.M)
+    f = factorize_spd(A)
+    assert isinstance(f, BandedCholesky)
+    b = np.random.default_rng(0).normal(size=(A.shape[0], 3))
+    x = f.solve(b)
+    assert np.abs(x - sla.splu(A.tocsc()).solve(b)).max() <= 1e-10 * np.abs(x).max()
+
+
+def test_a_wide_band_or_an_indefinite_matrix_goes_to_lu():
+    rng = np.random.default_rng(1)
+    dense = rng.normal(size=(40, 40))
+    spd = sp.csr_matrix(dense @ dense.T + 40 * np.eye(40))  # full: no narrow band
+    indefinite = sp.diags(np.r_[np.ones(39), -1.0]).tocsr()
+    for A in (spd, indefinite):
+        f = factorize_spd(A)
+        assert not isinstance(f, BandedCholesky)
+        b = rng.normal(size=40)
+        assert np.allclose(A @ f.solve(b), b)
