@@ -161,9 +161,12 @@ class CaseProbes:
                 self.columns.append(("system", SYSTEM_PROBES[q.kind, q.field]))
             else:
                 raise ModelError(f"{case.name}: probe {q.name!r} ({q.kind} of {q.field}) is not available here")
+        self.only_points = self.columns == [("point", k) for k in range(len(self.columns))]
 
     def values(self, state, system) -> np.ndarray:
         point = self.points.evaluate(state.u, state.v)
+        if self.only_points:  # the common case, once per step: no per-probe dispatch
+            return point
         plastic = self.plastic.evaluate(system.peps) if self.plastic else ()
         return np.array([point[i] if kind == "point" else plastic[i] if kind == "plastic"
                          else getattr(system, i)(state) for kind, i in self.columns])
