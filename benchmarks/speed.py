@@ -18,7 +18,7 @@ from cases import get_case
 from smfem.contact import ContactSystem
 from smfem.iterative import BlockIterative
 from smfem.options import SolverOptions
-from smfem.solver import _system, solve
+from smfem.solver import build_system, solve
 
 RUNS = (("notched_strip", {}), ("notched_cylinder", {"harmonics": 40, "refine": 2}),
         ("thick_cylinder", {"plastic": True}), ("rod_impact", {"refine": 4}))
@@ -28,7 +28,7 @@ def bare_solve_time(case, iterations: np.ndarray) -> float:
     """CPU time of the solves a run made, with its own factorizations, on random right-hand
     sides: per iteration one solve of the stacked matrix (or one per mode for the paper's block
     sweep); per step one solve per mode for the contact layer (its state iterations reuse them)."""
-    model, system, _ = _system(case, SolverOptions())
+    model, system, _ = build_system(case, SolverOptions())
     if isinstance(system, ContactSystem):
         factors, count = system.lus, len(iterations)
     elif isinstance(system, BlockIterative):

@@ -61,11 +61,11 @@ def solve(case, options: SolverOptions | None = None, progress=None, with_fields
     """
     cpu0 = time.process_time()
     options = options or SolverOptions()
-    model, system, how = _system(case, options)
+    model, system, how = build_system(case, options)
     return _run(case, model, system, how, progress, with_fields, cpu0)
 
 
-def _system(case, options: SolverOptions):
+def build_system(case, options: SolverOptions):
     """The model, the system that solves its steps, and the ``info['solve']`` that names it."""
     plastic = case.material.plastic
     if case.wall is not None:
