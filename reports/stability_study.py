@@ -118,7 +118,7 @@ def _held_at_zero(model: Model) -> Model:
     fix in :mod:`smfem.element`), for the comparison row."""
     model.ops = dataclasses.replace(model.ops, free_ratio=0.0)
     for i, s in enumerate(model.systems):
-        s.K = (s.T.T @ model.full_stiffness(i, i) @ s.T).tocsr()
+        s.K = (s.T.T @ model.full_stiffness(i) @ s.T).tocsr()
     return model
 
 

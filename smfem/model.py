@@ -23,6 +23,10 @@ from .constitutive import isotropic_D
 from .mesh import SectionMesh, section_mesh
 
 
+#: harmonic pairs assembled per batch by :meth:`Model.coupled_stiffness` (bounds its memory)
+CHUNK_PAIRS = 2000
+
+
 class ModelError(UnsupportedCase):
     """The case asks for something this model cannot represent (a clear, user-facing message)."""
 
@@ -49,7 +53,7 @@ class Model:
         set up the x3 sample points for stresses
 
     The off-diagonal stiffness blocks are assembled only on request
-    (:meth:`assemble_coupled_stiffness`): a direct solve needs them, the block-iterative solver
+    (:meth:`coupled_stiffness`): a direct solve needs them, the block-iterative solver
     takes the coupling from the stresses instead.
     """
 
@@ -99,7 +103,7 @@ class Model:
         self.systems: list[ModeSystem] = []
         for i, mode in enumerate(self.modes):
             T = constraints.mode_map(case, self.mesh, mode, fixed)
-            K = (T.T @ self.full_stiffness(i, i) @ T).tocsr()
+            K = (T.T @ self.full_stiffness(i) @ T).tocsr()
             M = T.multiply(T).T @ self.full_mass(i, i)  # T'diag(m)T stays diagonal: T's columns do not overlap
             self.systems.append(ModeSystem(mode, T, K, M, T.T @ Q[mode], self._project(T, V[mode])))
         self.coupling: dict[tuple[int, int], tuple[sp.csr_matrix, sp.csr_matrix]] = {}
@@ -128,12 +132,45 @@ class Model:
         return (sum(min(self.systems[i].K.nnz, 144 * live(i, j)) for i, j in self.coupling)
                 + sum(s.K.nnz for s in self.systems))
 
-    def assemble_coupled_stiffness(self) -> None:
-        """Fill the off-diagonal stiffness blocks ``K(lm)`` of ``coupling``."""
-        for (i, j), (K, M) in self.coupling.items():
-            if K is None:
-                Ti, Tj = self.systems[i].T, self.systems[j].T
-                self.coupling[i, j] = ((Ti.T @ self.full_stiffness(i, j) @ Tj).tocsr(), M)
+    def coupled_stiffness(self) -> sp.csr_matrix:
+        """The off-diagonal stiffness blocks ``K(lm)``, l != m, of every coupled pair, as one
+        matrix on the stacked reduced amplitudes: assembled in one batched pass over the
+        cut-out elements (elsewhere different harmonics do not couple)."""
+        pairs = list(self.coupling)
+        offsets = np.cumsum([0] + [s.T.shape[1] for s in self.systems])
+        n = int(offsets[-1])
+        if not pairs:
+            return sp.csr_matrix((n, n))
+        live = np.flatnonzero((self.factor != 1.0).any(axis=1))
+        ops = self.ops.subset(live)
+        B = [ops.at(fourier.wavenumber(m, self.body, self.length)) for m in self.modes]
+        dofs = assembly.element_dofs(self.mesh.elements[live])  # (ne, 12)
+        reduced, sign = [], []  # per mode: the reduced column of every full dof (-1: none), its coefficient
+        for s in self.systems:
+            T = s.T.tocoo()
+            r, c = np.full(T.shape[0], -1), np.zeros(T.shape[0])
+            r[T.row], c[T.row] = T.col, T.data
+            reduced.append(r[dofs]), sign.append(c[dofs])
+        rows, cols, vals = [], [], []
+        for start in range(0, len(pairs), CHUNK_PAIRS):
+            pi, pj = np.array(pairs[start:start + CHUNK_PAIRS]).T
+            I = np.stack([self._integrals[i, j][live] for i, j in zip(pi, pj)])  # (P, ne, 2, 2)
+            Dw = assembly.weighted_elasticity(self.D, I.reshape(-1, 2, 2)).reshape(len(pi), len(live), 6, 6)
+            L = [np.stack([B[i][k] for i in pi]) for k in range(3)]
+            R = [np.stack([B[j][k] for j in pj]) for k in range(3)]
+            k = np.einsum("peri,pers,pesj->peij", L[0], Dw, R[0], optimize=True)
+            k += (np.einsum("peri,pers,pesj->peij", L[1], Dw, R[1], optimize=True)
+                  + np.einsum("peri,pers,pesj->peij", L[2], Dw, R[2], optimize=True)) / 12.0
+            k *= ops.sqrt_g[None, :, None, None]
+            ri, rj = np.stack([reduced[i] for i in pi]), np.stack([reduced[j] for j in pj])  # (P, ne, 12)
+            ci, cj = np.stack([sign[i] for i in pi]), np.stack([sign[j] for j in pj])
+            keep = (ri[..., :, None] >= 0) & (rj[..., None, :] >= 0) & (k != 0.0)
+            rows.append(np.broadcast_to(offsets[pi][:, None, None, None] + ri[..., :, None], keep.shape)[keep])
+            cols.append(np.broadcast_to(offsets[pj][:, None, None, None] + rj[..., None, :], keep.shape)[keep])
+            vals.append((k * ci[..., :, None] * cj[..., None, :])[keep])
+        K = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+        K.eliminate_zeros()
+        return K
 
     @staticmethod
     def _reachable(loaded: list[int], strength: np.ndarray, tol: float = 1e-12) -> list[int]:
@@ -159,16 +196,11 @@ class Model:
         out[:, 0, 0], out[:, 1, 1] = i1, i3
         return out
 
-    def full_stiffness(self, i: int, j: int) -> sp.csr_matrix:
-        """Unconstrained stiffness block (3 n_nodes square) coupling active modes ``i`` and ``j``:
-        over the elements where their x3 integral is not zero (the cut-outs', for i != j)."""
-        I = self._integrals[i, j]
-        live = np.flatnonzero(np.abs(I).reshape(len(I), -1).max(axis=1) > 0) if i != j else slice(None)
-        Dw = assembly.weighted_elasticity(self.D, I[live])
+    def full_stiffness(self, i: int) -> sp.csr_matrix:
+        """Unconstrained stiffness block (3 n_nodes square) of active mode ``i`` with itself."""
+        Dw = assembly.weighted_elasticity(self.D, self._integrals[i, i])
         p = fourier.wavenumber(self.modes[i], self.body, self.length)
-        q = fourier.wavenumber(self.modes[j], self.body, self.length)
-        ops = self.ops if i == j else self.ops.subset(live)
-        return assembly.assemble(element.element_stiffness(ops, p, Dw, q), self.mesh.elements[live], self.mesh.n_nodes)
+        return assembly.assemble(element.element_stiffness(self.ops, p, Dw), self.mesh.elements, self.mesh.n_nodes)
 
     def full_mass(self, i: int, j: int) -> np.ndarray:
         """Unconstrained lumped mass diagonal (3 n_nodes,) of block ``(i, j)``."""

@@ -41,12 +41,8 @@ def stacked(model: Model):
     Q, V0 = np.concatenate([s.Q for s in S]), np.concatenate([s.V0 for s in S])
     if not model.coupling:
         return sp.block_diag([s.K for s in S], format="csr"), model.mass_matrix(), Q, V0, offsets
-    model.assemble_coupled_stiffness()  # a missing block must never count as zero
-    n = len(S)
-    Kb = [[model.coupling[i, j][0] if (i, j) in model.coupling else None for j in range(n)] for i in range(n)]
-    for i, s in enumerate(S):
-        Kb[i][i] = s.K
-    return sp.bmat(Kb, format="csr"), model.mass_matrix(), Q, V0, offsets
+    K = (sp.block_diag([s.K for s in S], format="csr") + model.coupled_stiffness()).tocsr()
+    return K, model.mass_matrix(), Q, V0, offsets
 
 
 def solve(case, options: SolverOptions | None = None, progress=None, with_fields: bool = True) -> RunResult:
@@ -78,8 +74,6 @@ def build_system(case, options: SolverOptions):
     coupled = bool(model.coupling)
     wanted = model.coupled_nonzeros() <= options.direct_max_nonzeros if options.direct is None else options.direct
     use_direct = coupled and wanted
-    if use_direct:
-        model.assemble_coupled_stiffness()
     if not plastic and (use_direct or not coupled):
         K, M, Q, _, _ = stacked(model)
         how = ("direct: the coupled block system, one factorization" if coupled
