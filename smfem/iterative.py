@@ -105,7 +105,9 @@ class BlockIterative:
             self.coupled_lu = sla.splu((K + a0M).tocsc())
             self.Q = np.concatenate([s.Q for s in S])
         self.factorizations = len(S) if coupled is None else 1
-        self.mass_coupling = {i: [(j, m[1]) for (a, j), m in model.coupling.items() if a == i] for i in range(len(S))}
+        # each mode's rows of the mass coupling rho(lm), l != m, acting on all modes stacked
+        o = model.offsets
+        self.mass_rows = [model.coupled_mass[o[i]:o[i + 1]] for i in range(len(S))] if model.coupling else None
         mat = model.case.material
         self.plastic = mat.plastic
         self.sigma_y0, self.H = mat.sigma_y, mat.hardening_modulus
@@ -117,8 +119,8 @@ class BlockIterative:
     def inertia(self, i: int, new: list[np.ndarray], predicted: list[np.ndarray]) -> np.ndarray:
         """Row ``i`` of ``M a`` with ``a = a0 (u - u_predicted)``, the mass coupling included."""
         out = self.model.systems[i].M * (new[i] - predicted[i])
-        for j, Mij in self.mass_coupling[i]:
-            out = out + Mij @ (new[j] - predicted[j])
+        if self.mass_rows is not None:
+            out = out + self.mass_rows[i] @ (np.concatenate(new) - np.concatenate(predicted))
         return self.c.a0 * out
 
     @property

@@ -106,23 +106,59 @@ class Model:
             K = (T.T @ self.full_stiffness(i) @ T).tocsr()
             M = T.multiply(T).T @ self.full_mass(i, i)  # T'diag(m)T stays diagonal: T's columns do not overlap
             self.systems.append(ModeSystem(mode, T, K, M, T.T @ Q[mode], self._project(T, V[mode])))
-        self.coupling: dict[tuple[int, int], tuple[sp.csr_matrix, sp.csr_matrix]] = {}
-        for (i, j) in self._integrals:
-            if i != j:
-                Ti, Tj = self.systems[i].T, self.systems[j].T
-                mass = (Ti.T @ sp.diags(self.full_mass(i, j)) @ Tj).tocsr()
-                mass.eliminate_zeros()
-                self.coupling[i, j] = (None, mass)
+        #: the pairs of different modes the material couples (empty for a body homogeneous along x3)
+        self.coupling: list[tuple[int, int]] = [(i, j) for (i, j) in self._integrals if i != j]
+        self.offsets = np.cumsum([0] + [s.T.shape[1] for s in self.systems])
+        self.coupled_mass = self._coupled_mass()
 
     def mass_matrix(self):
         """Stacked mass of all modes: the diagonal (n,) when the modes decouple, else the sparse
-        block matrix with the mass coupling rho(lm)."""
-        S = self.systems
+        matrix with the mass coupling rho(lm)."""
+        diagonal = np.concatenate([s.M for s in self.systems])
+        return (sp.diags(diagonal) + self.coupled_mass).tocsr() if self.coupling else diagonal
+
+    def _reduced_maps(self, dofs: np.ndarray):
+        """Per mode, the reduced column of each of ``dofs`` (-1: none) and its coefficient in T."""
+        maps = []
+        for s in self.systems:
+            T = s.T.tocoo()
+            r, c = np.full(T.shape[0], -1), np.zeros(T.shape[0])
+            r[T.row], c[T.row] = T.col, T.data
+            maps.append((r[dofs], c[dofs]))
+        return maps
+
+    def _scatter_pairs(self, pairs, values: np.ndarray, dofs: np.ndarray, maps) -> tuple:
+        """COO entries on the stacked reduced amplitudes of per-pair values on full dofs:
+        ``values`` (P, ..., a, b) on rows ``dofs[..., a]`` of mode i and columns ``dofs[..., b]``
+        of mode j."""
+        pi, pj = np.array(pairs).T
+        ri, ci = (np.stack([maps[i][k] for i in pi]) for k in (0, 1))
+        rj, cj = (np.stack([maps[j][k] for j in pj]) for k in (0, 1))
+        keep = (ri[..., :, None] >= 0) & (rj[..., None, :] >= 0) & (values != 0.0)
+        at = (slice(None),) + (None,) * ri.ndim  # the pair's offsets against (P, ..., a, b)
+        rows = np.broadcast_to(self.offsets[pi][at] + ri[..., :, None], keep.shape)[keep]
+        cols = np.broadcast_to(self.offsets[pj][at] + rj[..., None, :], keep.shape)[keep]
+        return rows, cols, (values * ci[..., :, None] * cj[..., None, :])[keep]
+
+    def _coupled_mass(self) -> sp.csr_matrix:
+        """The off-diagonal lumped mass blocks ``rho(lm)`` of every coupled pair, as one matrix:
+        a lumped mass is diagonal on the full dofs, so each block maps each cut-out node's dofs."""
+        n = int(self.offsets[-1])
         if not self.coupling:
-            return np.concatenate([s.M for s in S])
-        blocks = [[sp.diags(s.M) if i == j else (self.coupling[i, j][1] if (i, j) in self.coupling else None)
-                   for j in range(len(S))] for i, s in enumerate(S)]
-        return sp.bmat(blocks, format="csr")
+            return sp.csr_matrix((n, n))
+        live = np.flatnonzero((self.factor != 1.0).any(axis=1))
+        nodes = np.unique(self.mesh.elements[live])
+        dofs = (3 * nodes[:, None] + np.arange(3)).reshape(-1, 1)  # (n_dofs, 1): a 1 x 1 block per dof
+        maps = self._reduced_maps(dofs)
+        rows, cols, vals = [], [], []
+        for start in range(0, len(self.coupling), CHUNK_PAIRS):
+            pairs = self.coupling[start:start + CHUNK_PAIRS]
+            m = np.stack([self.full_mass(i, j)[dofs] for i, j in pairs])[..., None]  # (P, n_dofs, 1, 1)
+            r, c, v = self._scatter_pairs(pairs, m, dofs, maps)
+            rows.append(r), cols.append(c), vals.append(v)
+        M = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+        M.eliminate_zeros()
+        return M
 
     def coupled_nonzeros(self) -> int:
         """Nonzeros of the whole coupled stiffness, bounded before assembling it: an
@@ -136,38 +172,28 @@ class Model:
         """The off-diagonal stiffness blocks ``K(lm)``, l != m, of every coupled pair, as one
         matrix on the stacked reduced amplitudes: assembled in one batched pass over the
         cut-out elements (elsewhere different harmonics do not couple)."""
-        pairs = list(self.coupling)
-        offsets = np.cumsum([0] + [s.T.shape[1] for s in self.systems])
-        n = int(offsets[-1])
-        if not pairs:
+        n = int(self.offsets[-1])
+        if not self.coupling:
             return sp.csr_matrix((n, n))
         live = np.flatnonzero((self.factor != 1.0).any(axis=1))
         ops = self.ops.subset(live)
         B = [ops.at(fourier.wavenumber(m, self.body, self.length)) for m in self.modes]
         dofs = assembly.element_dofs(self.mesh.elements[live])  # (ne, 12)
-        reduced, sign = [], []  # per mode: the reduced column of every full dof (-1: none), its coefficient
-        for s in self.systems:
-            T = s.T.tocoo()
-            r, c = np.full(T.shape[0], -1), np.zeros(T.shape[0])
-            r[T.row], c[T.row] = T.col, T.data
-            reduced.append(r[dofs]), sign.append(c[dofs])
+        maps = self._reduced_maps(dofs)
         rows, cols, vals = [], [], []
-        for start in range(0, len(pairs), CHUNK_PAIRS):
-            pi, pj = np.array(pairs[start:start + CHUNK_PAIRS]).T
-            I = np.stack([self._integrals[i, j][live] for i, j in zip(pi, pj)])  # (P, ne, 2, 2)
-            Dw = assembly.weighted_elasticity(self.D, I.reshape(-1, 2, 2)).reshape(len(pi), len(live), 6, 6)
+        for start in range(0, len(self.coupling), CHUNK_PAIRS):
+            pairs = self.coupling[start:start + CHUNK_PAIRS]
+            pi, pj = np.array(pairs).T
+            I = np.stack([self._integrals[i, j][live] for i, j in pairs])  # (P, ne, 2, 2)
+            Dw = assembly.weighted_elasticity(self.D, I.reshape(-1, 2, 2)).reshape(len(pairs), len(live), 6, 6)
             L = [np.stack([B[i][k] for i in pi]) for k in range(3)]
             R = [np.stack([B[j][k] for j in pj]) for k in range(3)]
             k = np.einsum("peri,pers,pesj->peij", L[0], Dw, R[0], optimize=True)
             k += (np.einsum("peri,pers,pesj->peij", L[1], Dw, R[1], optimize=True)
                   + np.einsum("peri,pers,pesj->peij", L[2], Dw, R[2], optimize=True)) / 12.0
             k *= ops.sqrt_g[None, :, None, None]
-            ri, rj = np.stack([reduced[i] for i in pi]), np.stack([reduced[j] for j in pj])  # (P, ne, 12)
-            ci, cj = np.stack([sign[i] for i in pi]), np.stack([sign[j] for j in pj])
-            keep = (ri[..., :, None] >= 0) & (rj[..., None, :] >= 0) & (k != 0.0)
-            rows.append(np.broadcast_to(offsets[pi][:, None, None, None] + ri[..., :, None], keep.shape)[keep])
-            cols.append(np.broadcast_to(offsets[pj][:, None, None, None] + rj[..., None, :], keep.shape)[keep])
-            vals.append((k * ci[..., :, None] * cj[..., None, :])[keep])
+            r, c, v = self._scatter_pairs(pairs, k, dofs, maps)
+            rows.append(r), cols.append(c), vals.append(v)
         K = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
         K.eliminate_zeros()
         return K

@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from cases import get_case
 from cases.geometry import Cutout, Probe, interval_fourier
@@ -124,8 +125,9 @@ def test_the_harmonic_coupling_is_exactly_sparse():
     assert 0 < len(cut) < model.mesh.n_elements / 2 and model.coupling
     offsets = np.cumsum([0] + [s.T.shape[1] for s in model.systems])
     cut_dofs = np.unique(assembly.element_dofs(model.mesh.elements[cut]))
-    for (i, j), (_, M) in model.coupling.items():
+    for i, j in model.coupling:
         block = K[offsets[i]:offsets[i + 1], offsets[j]:offsets[j + 1]]
+        M = model.coupled_mass[offsets[i]:offsets[i + 1], offsets[j]:offsets[j + 1]]
         Si, Sj = model.systems[i], model.systems[j]
         assert set(np.unique(block.nonzero()[0])) <= set(Si.T[cut_dofs].nonzero()[1])
         # one pair the plain way: every element, assembled and mapped on its own
@@ -134,4 +136,6 @@ def test_the_harmonic_coupling_is_exactly_sparse():
         full = assembly.assemble(element.element_stiffness(model.ops, p, Dw, q), model.mesh.elements, model.mesh.n_nodes)
         plain = (Si.T.T @ full @ Sj.T).toarray()
         assert np.abs(block.toarray() - plain).max() <= 1e-12 * np.abs(plain).max(initial=1.0)
+        mass = (Si.T.T @ sp.diags(model.full_mass(i, j)) @ Sj.T).toarray()
+        assert np.abs(M.toarray() - mass).max() <= 1e-12 * np.abs(mass).max(initial=1.0)
         assert np.all(block.data != 0) and np.all(M.data != 0)
