@@ -22,10 +22,11 @@ MAX_BAND_ENTRIES = 30_000_000
 class BandedCholesky:
     """``A = L L'`` of a symmetric positive definite ``A`` in a reverse Cuthill-McKee ordering."""
 
-    def __init__(self, A: sp.spmatrix, perm: np.ndarray, bandwidth: int):
-        Ap = sp.csr_matrix(A)[perm][:, perm].tocoo()
+    def __init__(self, Ap: sp.coo_matrix, perm: np.ndarray, bandwidth: int):
+        """``Ap``: the matrix already reordered by ``perm``, whose band is ``bandwidth`` wide.
+        Raises ``LinAlgError`` where it is not positive definite."""
         upper = Ap.row <= Ap.col
-        band = np.zeros((bandwidth + 1, A.shape[0]))
+        band = np.zeros((bandwidth + 1, Ap.shape[0]))
         band[bandwidth + Ap.row[upper] - Ap.col[upper], Ap.col[upper]] = Ap.data[upper]
         self.factor, self.perm = la.cholesky_banded(band, check_finite=False), perm
 
@@ -42,9 +43,8 @@ def factorize_spd(A: sp.spmatrix):
     perm = reverse_cuthill_mckee(A, symmetric_mode=True)
     coo = A[perm][:, perm].tocoo()
     bandwidth = int(np.abs(coo.row - coo.col).max(initial=0))
-    if A.shape[0] * (bandwidth + 1) <= MAX_BAND_ENTRIES and bandwidth < A.shape[0] // 4:
-        try:
-            return BandedCholesky(A, perm, bandwidth)
-        except la.LinAlgError:  # not positive definite after all: the general path
-            pass
-    return sla.splu(A.tocsc())
+    narrow = A.shape[0] * (bandwidth + 1) <= MAX_BAND_ENTRIES and bandwidth < A.shape[0] // 4
+    try:
+        return BandedCholesky(coo, perm, bandwidth) if narrow else sla.splu(A.tocsc())
+    except la.LinAlgError:  # not positive definite after all: the general path
+        return sla.splu(A.tocsc())

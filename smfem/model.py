@@ -81,6 +81,8 @@ class Model:
         if self.inhomogeneous or nonlinear:
             self.x3, self.x3_weights = inhomogeneity.x3_quadrature(case, n_harm)
             self.factor = inhomogeneity.element_factor(case, self.mesh, self.x3)
+            #: the elements whose material varies along x3: the only ones that couple harmonics
+            self.cutout_elements = np.flatnonzero((self.factor != 1.0).any(axis=1))
         if nonlinear:
             allowed = set(symmetry.nonlinear_modes(case, candidates))
             active = [i for i, m in enumerate(candidates) if m in allowed]
@@ -88,7 +90,8 @@ class Model:
             I = inhomogeneity.coupling_integrals(candidates, case, self.factor, self.x3, self.x3_weights)
             # outside the cut-outs f = 1 and different harmonics are orthogonal along x3: their
             # integrals are round-off there; exact zeros keep the coupled matrix sparse
-            outside = (self.factor == 1.0).all(axis=1)
+            outside = np.ones(self.mesh.n_elements, bool)
+            outside[self.cutout_elements] = False
             I[~np.eye(len(candidates), dtype=bool)[:, :, None] & outside[None, None, :]] = 0.0
             if not nonlinear:
                 # an isotropic D and the lumped mass pair psi1 with psi1 and psi3 with psi3 only
@@ -146,7 +149,7 @@ class Model:
         n = int(self.offsets[-1])
         if not self.coupling:
             return sp.csr_matrix((n, n))
-        live = np.flatnonzero((self.factor != 1.0).any(axis=1))
+        live = self.cutout_elements
         nodes = np.unique(self.mesh.elements[live])
         dofs = (3 * nodes[:, None] + np.arange(3)).reshape(-1, 1)  # (n_dofs, 1): a 1 x 1 block per dof
         maps = self._reduced_maps(dofs)
@@ -175,7 +178,7 @@ class Model:
         n = int(self.offsets[-1])
         if not self.coupling:
             return sp.csr_matrix((n, n))
-        live = np.flatnonzero((self.factor != 1.0).any(axis=1))
+        live = self.cutout_elements
         ops = self.ops.subset(live)
         B = [ops.at(fourier.wavenumber(m, self.body, self.length)) for m in self.modes]
         dofs = assembly.element_dofs(self.mesh.elements[live])  # (ne, 12)
