@@ -26,14 +26,13 @@ RUNS = (("notched_strip", {}), ("notched_cylinder", {"harmonics": 40, "refine": 
 
 def bare_solve_time(case, iterations: np.ndarray) -> float:
     """CPU time of the solves a run made, with its own factorizations, on random right-hand
-    sides: per iteration one solve of the stacked matrix (or one per mode for the paper's block
-    sweep); per step one solve per mode for the contact layer (its state iterations reuse them)."""
+    sides: per iteration one solve of the stacked matrix (or one per mode for block Jacobi and the
+    paper's block sweep); per step one solve per mode for the contact layer (its state iterations reuse them)."""
     model, system, _ = build_system(case, SolverOptions())
     if isinstance(system, ContactSystem):
         factors, count = system.lus, len(iterations)
     elif isinstance(system, BlockIterative):
-        factors = [system.coupled_lu] if system.coupled_lu is not None else system.lu
-        count = int(iterations.sum())
+        factors, count = system.lus, int(iterations.sum())
     else:
         factors, count = [system.lu], len(iterations)
     rng = np.random.default_rng(0)

@@ -12,13 +12,14 @@ from cases.geometry import RING
 from . import fourier
 
 
-def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: np.ndarray | None = None) -> meshio.Mesh:
+def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: np.ndarray | None = None,
+               peps_x3: np.ndarray | None = None) -> meshio.Mesh:
     """Hexahedral 3-D mesh with the synthesized displacement (cartesian) as point data.
 
     Ring: ``n_x3`` sectors around the axis (default 72); prism: ``n_x3`` slices along the span
     (default 60). Cartesian axes as in :mod:`cases.geometry`. With ``peps`` (the plastic strain
-    at the sample points, (n_elements, 4, n_x3_points)) each cell also carries the element's
-    mean over its Gauss points at the x3 point nearest to the cell's middle.
+    at the sample points, (n_elements, 4, n_x3_points), at ``peps_x3`` along x3) each cell also
+    carries the element's mean over its Gauss points at the x3 point nearest to the cell's middle.
     """
     mesh, body = model.mesh, model.body
     ring = body == RING
@@ -48,7 +49,7 @@ def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: 
     cell_data = {}
     if peps is not None:
         middle = x3[here] + 0.5 * ((x3[nxt] - x3[here]) % (2 * math.pi if ring else np.inf))
-        nearest = np.abs(model.x3[None, :] - middle[:, None]).argmin(axis=1)
+        nearest = np.abs(peps_x3[None, :] - middle[:, None]).argmin(axis=1)
         cell_data["peps"] = [peps.mean(axis=1)[:, nearest].T.ravel()]
     return meshio.Mesh(points.reshape(-1, 3), [("hexahedron", hexes.reshape(-1, 8))],
                        point_data={"displacement": disp.reshape(-1, 3)}, cell_data=cell_data)

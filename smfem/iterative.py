@@ -1,13 +1,19 @@
-"""The block-iterative algorithm (13)-(15) for elasto-plastic and inhomogeneous steps.
+"""The block-iterative algorithm (13)-(16) for elasto-plastic and inhomogeneous steps.
 
-Per time step, additional loads + Newton-Kantorovich + block successive over-relaxation over
-the harmonics: every diagonal block ``K(ll) + a0 M(ll)`` is factorized once, and
-``U(l) <- U(l) + omega Kt(ll)^-1 (Qt(l) - R(l))``, where ``R(l)`` holds the internal forces of
-the current stresses (inhomogeneity, plasticity and all harmonic coupling enter here) plus the
-inertia with the mass coupling, in Gauss-Seidel order. Within a sweep the stresses follow each
-block's update elastically (15); at the end of the sweep they are recomputed from the step's
-strain increment with Wilkins' correction (16). Converged when the relative change of the
-amplitudes in a sweep is below ``tol``. The material state is committed only then.
+Per time step the additional-loads method: the plastic strains act as loads on the elastic
+body, ``K u + a0 M (u - u_pred) = Q + F_p(eps_p)`` with ``F_p = int B' f D eps_p``, and each
+iteration solves the elastic system with the residual of the current iterate,
+``u <- u + A^-1 (Q + F_p - K u - a0 M (u - u_pred))``. ``K`` and ``M`` are applied exactly,
+the harmonic coupling of the cut-outs included (:class:`smfem.coupling.StackedOperator`);
+the plastic strains live at the sample points (:mod:`smfem.sampling`), where the trial
+stresses of the step's displacement increment are returned to the yield surface by Wilkins'
+correction (16). ``A``, the iteration matrix, is the whole coupled ``K + a0 M`` factorized
+once (exact for an elastic step: one iteration and a check), its diagonal blocks (block
+Jacobi, the coupling only in the residual), or the paper's block SOR over the harmonics, where
+within a sweep the stresses follow each block's update elastically (15). Anderson
+acceleration (Walker & Ni 2011) combines the last iterates. A step has converged when the
+correction of an iteration, ``A^-1`` times the residual, is below ``tol`` relative to the
+amplitudes; the material state is committed only then.
 
 A system of :func:`smfem.newmark.march`.
 """
@@ -23,9 +29,11 @@ import scipy.sparse.linalg as sla
 
 from cases.material import lame
 
+from .coupling import StackedOperator
+from .linalg import factorize_spd
 from .newmark import Constants, StepFailed
 from .options import SolverOptions
-from .plasticity import intensity, wilkins
+from .plasticity import intensity, return_map_rows
 from .sampling import SamplePoints
 
 
@@ -35,9 +43,8 @@ class NotConverged(StepFailed):
 
 class Anderson:
     """Anderson acceleration of the fixed point ``x -> x + f(x)`` (``f`` the correction one
-    elastic solve gives): the next iterate combines the last ``memory`` ones so that the
-    linearized correction is least (Walker & Ni 2011, type II). The stopping test stays the
-    size of the plain correction ``f``."""
+    solve gives): the next iterate combines the last ``memory`` ones so that the linearized
+    correction is least (Walker & Ni 2011, type II)."""
 
     def __init__(self, memory: int):
         self.memory, self.dX, self.dF, self.last = memory, [], [], None
@@ -59,143 +66,150 @@ class Anderson:
 
 @dataclass
 class PointState:
-    """Committed material state at the sample points (n_elements, 4, n_x3, ...): stresses,
-    plastic strains (Voigt) and the accumulated equivalent plastic strain."""
+    """Committed material state at the sample points, rows first ``(6, n_points)``: stresses,
+    plastic strains (Voigt, engineering shears), ``relaxed = f D eps_p`` (the stress the plastic
+    strains took off, whose forces are the additional loads) and the accumulated equivalent
+    plastic strain ``alpha`` (n_points,)."""
 
     sigma: np.ndarray
     eps_p: np.ndarray
+    relaxed: np.ndarray
     alpha: np.ndarray
 
-    @property
-    def peps(self) -> np.ndarray:
-        """Plastic strain intensity sqrt(2/3 eps_p : eps_p) (what the probes report)."""
-        return intensity(self.eps_p)
+    @classmethod
+    def zero(cls, n: int) -> "PointState":
+        return cls(np.zeros((6, n)), np.zeros((6, n)), np.zeros((6, n)), np.zeros(n))
 
 
 class BlockIterative:
-    """The steps of a nonlinear SMFEM model by block SOR over the harmonics.
+    """The steps of a nonlinear SMFEM model by the additional-loads iterations.
 
     Parameters
     ----------
     model : a :class:`smfem.model.Model` built with ``nonlinear=True``
     dt : time step, s
-    options : relaxation (omega of the block SOR), tolerance (relative change of the amplitudes
-        that ends the iterations) and the iteration limit
-    coupled : ``(K, M)`` of all harmonics stacked (``M`` a sparse matrix where the mass
-        couples them, else the lumped diagonal), to iterate with one solve of all harmonics
-        instead of the block sweep: the whole coupled elastic system where the material varies
-        along x3, the block-diagonal one where it does not (then the sweep is block Jacobi in
-        exact arithmetic anyway: the harmonics do not couple through the stiffness)
+    options : the iteration matrix (``'coupled'``, ``'blocks'`` or ``'sor'``: not ``'auto'``,
+        which :func:`smfem.solver.build_system` resolves), Anderson memory, relaxation,
+        tolerance, iteration limit and sample points along x3
     """
 
-    def __init__(self, model, dt: float, options: SolverOptions, coupled: tuple | None = None):
-        self.model, self.omega, self.memory = model, options.relaxation, options.anderson
+    def __init__(self, model, dt: float, options: SolverOptions):
+        self.model, self.omega = model, options.relaxation
+        self.kind = options.iteration_matrix
+        self.memory = options.anderson if self.kind != "sor" else 0
         self.tol, self.max_iter = options.tolerance_for(model.case), options.max_iterations
-        self.c = Constants.of(dt)
-        self.points = SamplePoints(model)
-        self.split = lambda x: np.split(x, self.points.offsets[1:-1])
+        self.c = c = Constants.of(dt)
+        self.op = StackedOperator(model)
+        self.points = SamplePoints(model, options.x3_oversampling)
         S = model.systems
-        if coupled is None:
-            self.lu = [sla.splu((s.K + sp.diags(self.c.a0 * s.M)).tocsc()) for s in S]
-            self.coupled_lu = None
-        else:
-            # the stacked elastic K + a0 M as the iteration matrix: all harmonics at once
-            K, self.M = coupled
-            a0M = sp.diags(self.c.a0 * self.M) if isinstance(self.M, np.ndarray) else self.c.a0 * self.M
-            self.coupled_lu = sla.splu((K + a0M).tocsc())
-            self.Q = np.concatenate([s.Q for s in S])
-        self.factorizations = len(S) if coupled is None else 1
-        # each mode's rows of the mass coupling rho(lm), l != m, acting on all modes stacked
-        o = model.offsets
-        self.mass_rows = [model.coupled_mass[o[i]:o[i + 1]] for i in range(len(S))] if model.coupling else None
+        self.offsets = model.offsets
+        self.Q = np.concatenate([s.Q for s in S])
+        if self.kind == "coupled":
+            A = model.coupled_stiffness() + c.a0 * model.coupled_mass if model.coupling else None
+            blocks = sp.block_diag([s.K + sp.diags(c.a0 * s.M) for s in S], format="csr")
+            self.lus = [factorize_spd(blocks if A is None else blocks + A)]
+        else:  # 'blocks' and 'sor': one factorization per diagonal block
+            self.lus = [factorize_spd(s.K + sp.diags(c.a0 * s.M)) for s in S]
+        if self.kind == "sor":  # the rows of each mode of the stacked matrices
+            K = sp.block_diag([s.K for s in S], format="csr") + (model.coupled_stiffness() if model.coupling else 0)
+            M = model.mass_matrix()
+            M = sp.csr_matrix(sp.diags(M) if isinstance(M, np.ndarray) else M)
+            o = self.offsets
+            self.rows = [(sp.csr_matrix(K[o[i]:o[i + 1]]), sp.csr_matrix(c.a0 * M[o[i]:o[i + 1]])) for i in range(len(S))]
+        self.factorizations = len(self.lus)
         mat = model.case.material
         self.plastic = mat.plastic
         self.sigma_y0, self.H = mat.sigma_y, mat.hardening_modulus
-        f = model.factor[:, None, :]  # the contrast material's stiffness is scaled
-        self.mu = lame(mat.E, mat.nu)[1] * np.broadcast_to(f, (len(f), 4, f.shape[2]))
-        self.state = PointState(np.zeros(self.mu.shape + (6,)), np.zeros(self.mu.shape + (6,)), np.zeros(self.mu.shape))
+        n_points = int(np.prod(self.points.point_shape[1:]))
+        # the contrast material's stiffness is scaled with its factor
+        self.mu = lame(mat.E, mat.nu)[1] * np.broadcast_to(self.points.factor[:, None, :], self.points.point_shape[1:]).ravel()
+        self.state = PointState.zero(n_points)
+        self.loads = np.zeros_like(self.Q)  # the committed additional loads F_p
         self.timings = {"synthesis": 0.0, "stress": 0.0, "projection": 0.0, "solves": 0.0}
-
-    def inertia(self, i: int, new: list[np.ndarray], predicted: list[np.ndarray]) -> np.ndarray:
-        """Row ``i`` of ``M a`` with ``a = a0 (u - u_predicted)``, the mass coupling included."""
-        out = self.model.systems[i].M * (new[i] - predicted[i])
-        if self.mass_rows is not None:
-            out = out + self.mass_rows[i] @ (np.concatenate(new) - np.concatenate(predicted))
-        return self.c.a0 * out
 
     @property
     def peps(self) -> np.ndarray:
-        return self.state.peps
+        """Plastic strain intensity sqrt(2/3 eps_p : eps_p) at the points over the whole x3
+        range (:attr:`peps_x3`), (ne, 4, n)."""
+        return self.points.unfolded(intensity(self.state.eps_p.T).reshape(self.points.point_shape[1:]))[1]
+
+    @property
+    def peps_x3(self) -> np.ndarray:
+        """The x3 of the points of :attr:`peps` (the sample points and their images)."""
+        return self.points.unfolded(self.points.x3)[0]
 
     def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
-        """``M a = Q - R(u0)``, the stresses of ``u0`` taken as the state at t = 0."""
-        S = self.model.systems
-        self.state = PointState(self.points.stress(self.split(u0)), self.state.eps_p, self.state.alpha)
-        force = np.concatenate([s.Q for s in S]) - self.points.forces(self.state.sigma)
+        """``M a = Q - K u0`` (no plastic strain at t = 0; ``u0`` is elastic)."""
+        if u0.any():
+            self.state.sigma = self.points.stress(u0).reshape(6, -1)
+        force = self.Q - self.op.K(u0)
         if self.model.coupling:
             return sla.spsolve(self.model.mass_matrix().tocsc(), force)
-        return force / np.concatenate([s.M for s in S])
+        return force / self.op.M_h
 
     def commit(self, u: np.ndarray) -> None:
-        self.state = self.pending
+        self.state, self.loads = self.pending
 
     def observe(self, state) -> None:
         """Nothing to watch between steps."""
 
     def report(self) -> tuple[str, dict]:
-        return "", {"n_x3_points": len(self.model.x3), "time_breakdown_s": dict(self.timings)}
+        return "", {"n_x3_points": len(self.points.x3), "time_breakdown_s": dict(self.timings)}
+
+    def residual(self, x: np.ndarray, predicted: np.ndarray, loads: np.ndarray) -> np.ndarray:
+        return self.Q + loads - self.op.K(x) - self.c.a0 * self.op.M(x - predicted)
+
+    def correction(self, x: np.ndarray, predicted: np.ndarray, loads: np.ndarray) -> np.ndarray:
+        """``A^-1`` times the residual at ``x`` (for ``'sor'``: one block SOR sweep's change)."""
+        if self.kind == "coupled":
+            return self.lus[0].solve(self.residual(x, predicted, loads))
+        o = self.offsets
+        if self.kind == "blocks":
+            r = self.residual(x, predicted, loads)
+            return np.concatenate([lu.solve(r[o[i]:o[i + 1]]) for i, lu in enumerate(self.lus)])
+        new = x.copy()
+        for i, (lu, (K, a0M)) in enumerate(zip(self.lus, self.rows)):
+            r = self.Q[o[i]:o[i + 1]] + loads[o[i]:o[i + 1]] - K @ new - a0M @ (new - predicted)
+            new[o[i]:o[i + 1]] += self.omega * lu.solve(r)  # (15): the stresses follow elastically
+        return new - x
 
     def solve(self, predicted: np.ndarray, u: np.ndarray, step_index: int, t: float) -> tuple[np.ndarray, int]:
         """One time step's iterations from the last step's ``u``; the new amplitudes and the
         number of iterations (the material state waits for :meth:`commit`)."""
-        S, c, pts = self.model.systems, self.c, self.points
-        tick = time.perf_counter
-        predicted, u = self.split(predicted), self.split(u)
-        new = [ui.copy() for ui in u]
-        sigma = self.state.sigma.copy()
-        anderson = Anderson(self.memory) if self.memory and self.coupled_lu is not None else None
+        tick, pts, state = time.perf_counter, self.points, self.state
+        anderson = Anderson(self.memory) if self.memory else None
+        x, loads = u, self.loads
         for iteration in range(1, self.max_iter + 1):
-            change2 = 0.0
-            if self.coupled_lu is not None:
-                t0 = tick()
-                x, p = np.concatenate(new), np.concatenate(predicted)
-                r = self.Q - pts.forces(sigma) - c.a0 * (self.M * (x - p) if isinstance(self.M, np.ndarray)
-                                                         else self.M @ (x - p))
-                t1 = tick()
-                du = self.coupled_lu.solve(r)
-                self.timings["projection"] += t1 - t0
-                self.timings["solves"] += tick() - t1
-                new = np.split(x + du if anderson is None else anderson.next(x, du), pts.offsets[1:-1])
-                change2 = du @ du
-            for i, s in enumerate(S if self.coupled_lu is None else ()):
-                t0 = tick()
-                r = s.Q - pts.force_of_mode(i, sigma) - self.inertia(i, new, predicted)
-                t1 = tick()
-                du = self.omega * self.lu[i].solve(r)
-                t2 = tick()
-                new[i] = new[i] + du
-                sigma = sigma + pts.stress_of_mode(i, du)  # (15): elastic within the sweep
-                t3 = tick()
-                self.timings["projection"] += t1 - t0
-                self.timings["solves"] += t2 - t1
-                self.timings["synthesis"] += t3 - t2
-                change2 += du @ du
             t0 = tick()
-            trial = self.state.sigma + pts.stress(np.concatenate(new) - np.concatenate(u))
+            dx = self.correction(x, predicted, loads)
+            x = x + dx if anderson is None else anderson.next(x, dx)
             t1 = tick()
-            if self.plastic:
-                sigma, alpha, deps_p, _ = wilkins(trial, self.state.alpha, self.mu, self.sigma_y0, self.H)
-            else:
-                sigma, alpha, deps_p = trial, self.state.alpha, 0.0
-            self.timings["synthesis"] += t1 - t0
-            self.timings["stress"] += tick() - t1
-            size2 = sum(x @ x for x in new)
+            trial = state.sigma + pts.stress(x - u).reshape(6, -1)
+            t2 = tick()
+            sigma, alpha, at, deps_p = (return_map_rows(trial, state.alpha, self.mu, self.sigma_y0, self.H)
+                                        if self.plastic else (trial, state.alpha, (), None))
+            t3 = tick()
+            relaxed, loads = state.relaxed, self.loads
+            if len(at):
+                relaxed = relaxed.copy()
+                relaxed[:, at] += trial[:, at] - sigma[:, at]  # = f D d_eps_p
+                loads = pts.forces(relaxed.reshape(pts.point_shape))
+            t4 = tick()
+            self.timings["solves"] += t1 - t0
+            self.timings["synthesis"] += t2 - t1
+            self.timings["stress"] += t3 - t2
+            self.timings["projection"] += t4 - t3
+            change2, size2 = dx @ dx, x @ x
             if not (np.isfinite(change2) and np.isfinite(size2)):
                 raise NotConverged(f"step {step_index} (t = {t:.6g} s) diverged at iteration {iteration}: "
                                    f"the amplitudes are no longer finite")
             if change2 <= self.tol**2 * max(size2, 1e-300):
-                self.pending = PointState(sigma, self.state.eps_p + deps_p, alpha)
-                return np.concatenate(new), iteration
+                eps_p = state.eps_p
+                if len(at):
+                    eps_p = eps_p.copy()
+                    eps_p[:, at] += deps_p
+                self.pending = (PointState(sigma, eps_p, relaxed, alpha), loads)
+                return x, iteration
         raise NotConverged(
             f"step {step_index} (t = {t:.6g} s) did not converge in {self.max_iter} iterations "
             f"(relative change {np.sqrt(change2 / max(size2, 1e-300)):.3g}, tol {self.tol:g})"

@@ -87,30 +87,36 @@ class Model:
             allowed = set(symmetry.nonlinear_modes(case, candidates))
             active = [i for i, m in enumerate(candidates) if m in allowed]
         if self.inhomogeneous:
-            I = inhomogeneity.coupling_integrals(candidates, case, self.factor, self.x3, self.x3_weights)
-            # outside the cut-outs f = 1 and different harmonics are orthogonal along x3: their
-            # integrals are round-off there; exact zeros keep the coupled matrix sparse
-            outside = np.ones(self.mesh.n_elements, bool)
-            outside[self.cutout_elements] = False
-            I[~np.eye(len(candidates), dtype=bool)[:, :, None] & outside[None, None, :]] = 0.0
+            # elements share a few profiles f(x3) (1 outside the cut-outs): integrate each once
+            profiles, self._profile = np.unique(self.factor, axis=0, return_inverse=True)
+            self._profile = self._profile.ravel()
+            considered = active if nonlinear else list(range(len(candidates)))
+            I = inhomogeneity.coupling_integrals([candidates[a] for a in considered], case, profiles,
+                                                 self.x3, self.x3_weights)
+            # where f = 1 different harmonics are orthogonal along x3: their integrals are
+            # round-off; exact zeros keep the coupled matrix sparse
+            I[~np.eye(len(considered), dtype=bool)[:, :, None] & (profiles == 1.0).all(axis=1)[None, None, :]] = 0.0
             if not nonlinear:
                 # an isotropic D and the lumped mass pair psi1 with psi1 and psi3 with psi3 only
                 strength = np.maximum(np.abs(I[..., 0, 0]), np.abs(I[..., 1, 1])).max(axis=2)
-                active = self._reachable(loaded, strength)
-            self._integrals = {(i, j): I[a, b] for i, a in enumerate(active) for j, b in enumerate(active)}
+                kept = self._reachable(loaded, strength)
+                active, I = kept, I[np.ix_(kept, kept)]
+            self._I = I  # (n_active, n_active, n_profiles, 2, 2)
+            linked = np.abs(I).reshape(len(active), len(active), -1).max(axis=2) > 0
+            np.fill_diagonal(linked, False)
+            #: the pairs of different modes the material couples
+            self.coupling: list[tuple[int, int]] = [tuple(map(int, p)) for p in np.argwhere(linked)]
         else:
             active = active if nonlinear else loaded
-            self._integrals = {(i, i): self._homogeneous_integrals(candidates[a]) for i, a in enumerate(active)}
+            self._I = None
+            self.coupling = []
         self.modes = [candidates[a] for a in active]
         fixed = constraints.fixed_dofs(case, self.mesh)
         self.systems: list[ModeSystem] = []
-        for i, mode in enumerate(self.modes):
-            T = constraints.mode_map(case, self.mesh, mode, fixed)
-            K = (T.T @ self.full_stiffness(i) @ T).tocsr()
-            M = T.multiply(T).T @ self.full_mass(i, i)  # T'diag(m)T stays diagonal: T's columns do not overlap
+        self._maps = [constraints.mode_map(case, self.mesh, mode, fixed) for mode in self.modes]
+        for i, (mode, T) in enumerate(zip(self.modes, self._maps)):
+            K, M = self.reduced_blocks(i)
             self.systems.append(ModeSystem(mode, T, K, M, T.T @ Q[mode], self._project(T, V[mode])))
-        #: the pairs of different modes the material couples (empty for a body homogeneous along x3)
-        self.coupling: list[tuple[int, int]] = [(i, j) for (i, j) in self._integrals if i != j]
         self.offsets = np.cumsum([0] + [s.T.shape[1] for s in self.systems])
         self.coupled_mass = self._coupled_mass()
 
@@ -167,9 +173,15 @@ class Model:
         """Nonzeros of the whole coupled stiffness, bounded before assembling it: an
         off-diagonal block has at most 144 entries per element where its x3 integral is not
         zero (the cut-outs'), and at most the pattern of its row's diagonal block."""
-        live = lambda i, j: int((np.abs(self._integrals[i, j]).reshape(self.mesh.n_elements, -1).max(axis=1) > 0).sum())
-        return (sum(min(self.systems[i].K.nnz, 144 * live(i, j)) for i, j in self.coupling)
-                + sum(s.K.nnz for s in self.systems))
+        diagonal = sum(s.K.nnz for s in self.systems)
+        if not self.coupling:
+            return diagonal
+        n = len(self.systems)
+        nonzero = np.abs(self._I).reshape(n, n, self._I.shape[2], 4).max(axis=3) > 0  # (i, j, profile)
+        live = nonzero @ np.bincount(self._profile, minlength=self._I.shape[2])  # elements per pair
+        pi, pj = np.array(self.coupling).T
+        nnz = np.array([s.K.nnz for s in self.systems])
+        return int(np.minimum(nnz[pi], 144 * live[pi, pj]).sum()) + diagonal
 
     def coupled_stiffness(self) -> sp.csr_matrix:
         """The off-diagonal stiffness blocks ``K(lm)``, l != m, of every coupled pair, as one
@@ -187,7 +199,7 @@ class Model:
         for start in range(0, len(self.coupling), CHUNK_PAIRS):
             pairs = self.coupling[start:start + CHUNK_PAIRS]
             pi, pj = np.array(pairs).T
-            I = np.stack([self._integrals[i, j][live] for i, j in pairs])  # (P, ne, 2, 2)
+            I = self._I[pi, pj][:, self._profile[live]]  # (P, ne, 2, 2)
             Dw = assembly.weighted_elasticity(self.D, I.reshape(-1, 2, 2)).reshape(len(pairs), len(live), 6, 6)
             L = [np.stack([B[i][k] for i in pi]) for k in range(3)]
             R = [np.stack([B[j][k] for j in pj]) for k in range(3)]
@@ -218,24 +230,35 @@ class Model:
         """Reduced coordinates of a full vector that lies in the range of ``T``."""
         return sp.linalg.lsqr(T, v, atol=1e-14, btol=1e-14)[0] if v.any() else np.zeros(T.shape[1])
 
-    def _homogeneous_integrals(self, mode: fourier.Mode) -> np.ndarray:
-        """(n_elements, 2, 2) exact x3 integrals of basis products of one mode."""
-        i1, i3 = fourier.psi_squared_integrals(mode, self.body, self.length)
-        out = np.zeros((self.mesh.n_elements, 2, 2))
-        out[:, 0, 0], out[:, 1, 1] = i1, i3
+    def integrals(self, i: int, j: int, elements: np.ndarray | slice = slice(None), homogeneous: bool = False) -> np.ndarray:
+        """(n_elements, 2, 2) x3 integrals ``int f psi_a^(i) psi_b^(j)`` of active modes ``i, j``
+        per element (of ``elements`` only, if given); ``homogeneous``: with f = 1 everywhere."""
+        if self._I is not None and not homogeneous:
+            return self._I[i, j][self._profile[elements]]
+        n = len(np.arange(self.mesh.n_elements)[elements])
+        out = np.zeros((n, 2, 2))
+        if i == j:  # homogeneous along x3: exact, and zero between different modes
+            out[:, 0, 0], out[:, 1, 1] = fourier.psi_squared_integrals(self.modes[i], self.body, self.length)
         return out
 
-    def full_stiffness(self, i: int) -> sp.csr_matrix:
+    def full_stiffness(self, i: int, homogeneous: bool = False) -> sp.csr_matrix:
         """Unconstrained stiffness block (3 n_nodes square) of active mode ``i`` with itself."""
-        Dw = assembly.weighted_elasticity(self.D, self._integrals[i, i])
+        Dw = assembly.weighted_elasticity(self.D, self.integrals(i, i, homogeneous=homogeneous))
         p = fourier.wavenumber(self.modes[i], self.body, self.length)
         return assembly.assemble(element.element_stiffness(self.ops, p, Dw), self.mesh.elements, self.mesh.n_nodes)
 
-    def full_mass(self, i: int, j: int) -> np.ndarray:
+    def full_mass(self, i: int, j: int, homogeneous: bool = False) -> np.ndarray:
         """Unconstrained lumped mass diagonal (3 n_nodes,) of block ``(i, j)``."""
-        I = self._integrals[i, j]
+        I = self.integrals(i, j, homogeneous=homogeneous)
         rho_int = self.rho * np.stack([I[:, 0, 0], I[:, 1, 1]], axis=1)
         return assembly.lumped_mass(self.ops.sqrt_g, rho_int, self.mesh.elements, self.mesh.n_nodes)
+
+    def reduced_blocks(self, i: int, homogeneous: bool = False) -> tuple[sp.csr_matrix, np.ndarray]:
+        """Mode ``i``'s reduced stiffness and lumped mass diagonal; ``homogeneous``: of the body
+        without its cut-outs (f = 1)."""
+        T = self._maps[i]
+        K = (T.T @ self.full_stiffness(i, homogeneous) @ T).tocsr()
+        return K, T.multiply(T).T @ self.full_mass(i, i, homogeneous)  # T'diag(m)T: T's columns do not overlap
 
     @property
     def n_dof(self) -> int:

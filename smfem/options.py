@@ -14,34 +14,38 @@ class SolverOptions:
     """
     Attributes
     ----------
-    sweep : how a plastic step's iterations solve for the harmonics: ``'auto'`` solves all of
-        them at once with the stacked elastic matrix (block-diagonal for a body homogeneous along
-        x3, the whole coupled system where the material varies and it has at most
-        ``direct_max_nonzeros`` nonzeros), else the paper's block SOR; ``'sor'``: the paper's
-        block SOR over the harmonics always (its iteration counts)
-    anderson : iterates an Anderson acceleration of the stacked-solve iterations remembers (0:
-        the plain iteration, the paper's)
+    iteration_matrix : what a nonlinear step's iterations solve with (the residual is always the
+        exact one, the harmonic coupling included): ``'coupled'``, the whole coupled elastic
+        ``K + a0 M`` factorized once; ``'blocks'``, the per-harmonic diagonal blocks (block
+        Jacobi, the coupling only in the residual: matrix-free); ``'sor'``, the paper's block
+        SOR over the harmonics; ``'auto'``: ``'coupled'`` where the body is homogeneous along x3
+        (block-diagonal, one solve) or the coupled matrix has at most ``direct_max_nonzeros``
+        nonzeros, else ``'blocks'``. An elastic body with cut-outs is solved directly (one
+        factorization) under ``'auto'`` and ``'coupled'``, by the iterations otherwise.
+    anderson : iterates an Anderson acceleration of the iterations remembers (0: the plain
+        iteration, the paper's; not with ``'sor'``)
     relaxation : omega of the block SOR over the harmonics (1: Gauss-Seidel)
-    tolerance : relative change of the amplitudes that ends a step's iterations; None takes the
-        case's ``tol``
+    tolerance : size of the correction one iteration would make (the residual through the
+        iteration matrix), relative to the amplitudes, that ends a step's iterations; None
+        takes the case's ``tol``
     max_iterations : iterations allowed per step before a run stops as not converged
-    direct_max_nonzeros : the largest coupled system (nonzeros of ``K + a0 M``) factorized whole;
-        larger ones go through the block-iterative algorithm
-    direct : force (True) or forbid (False) the direct coupled solve of an elastic
-        inhomogeneous case; None chooses by ``direct_max_nonzeros``
+    direct_max_nonzeros : the largest coupled system (nonzeros of ``K + a0 M``) factorized whole
+        under ``'auto'``
+    x3_oversampling : stress sample points along x3, in multiples of the fewest that integrate
+        the kept modes exactly (:mod:`smfem.sampling`)
     layer_points_per_harmonic : contact-layer points around the circumference per harmonic kept
         (2 integrate the products of harmonics exactly; the edge of a contact zone needs more,
         benchmarks/README.md)
     max_state_iterations : contact-layer state iterations allowed per step
     """
 
-    sweep: str = "auto"
-    anderson: int = 0
+    iteration_matrix: str = "auto"
+    anderson: int = 5
     relaxation: float = 1.0
     tolerance: float | None = None
     max_iterations: int = 200
     direct_max_nonzeros: int = 40_000_000
-    direct: bool | None = None
+    x3_oversampling: float = 2.0
     layer_points_per_harmonic: int = 8
     max_state_iterations: int = 60
 
@@ -49,5 +53,7 @@ class SolverOptions:
         return self.tolerance if self.tolerance is not None else case.params["tol"]
 
     def __post_init__(self):
-        if self.sweep not in ("auto", "sor"):
-            raise ValueError(f"sweep={self.sweep!r}: 'auto' or 'sor'")
+        if self.iteration_matrix not in ("auto", "coupled", "blocks", "sor"):
+            raise ValueError(f"iteration_matrix={self.iteration_matrix!r}: 'auto', 'coupled', 'blocks' or 'sor'")
+        if self.x3_oversampling < 1.0:
+            raise ValueError(f"x3_oversampling={self.x3_oversampling}: at least 1 (fewer points are not exact)")

@@ -25,8 +25,27 @@ SQRT3 = math.sqrt(3.0)
 
 def shear_intensity(sigma: np.ndarray) -> np.ndarray:
     """``T = sqrt(S:S / 2)`` of Voigt stresses (..., 6)."""
-    s = sigma[..., :3] - sigma[..., :3].mean(axis=-1, keepdims=True)
-    return np.sqrt(0.5 * (s * s).sum(-1) + (sigma[..., 3:] ** 2).sum(-1))
+    return np.sqrt(_shear_squared(np.moveaxis(sigma, -1, 0)))
+
+
+def _shear_squared(rows: np.ndarray) -> np.ndarray:
+    """``T^2`` of stresses stored rows first, (6, ...)."""
+    mean = (rows[0] + rows[1] + rows[2]) / 3.0
+    return 0.5 * ((rows[0] - mean) ** 2 + (rows[1] - mean) ** 2 + (rows[2] - mean) ** 2) \
+        + rows[3] ** 2 + rows[4] ** 2 + rows[5] ** 2
+
+
+def _radial_return(trial: np.ndarray, eq: np.ndarray, alpha: np.ndarray, mu: np.ndarray, sigma_y0: float, H: float):
+    """The return of yielding trial stresses (6, n) with von Mises stress ``eq = sqrt(3) T``
+    above the yield stress: ``sigma, alpha, d_eps_p`` (engineering shears)."""
+    dalpha = (eq - (sigma_y0 + H * alpha)) / (3 * mu + H)
+    scale = 1.0 - 3 * mu * dalpha / eq
+    sigma = trial * scale
+    sigma[:3] += (trial[0] + trial[1] + trial[2]) / 3.0 * (1.0 - scale)  # the mean stress is left alone
+    # the deviator lost is 2 mu d_eps_p (tensor components; shears doubled for engineering)
+    deps_p = (trial - sigma) / (2 * mu)
+    deps_p[3:] *= 2.0
+    return sigma, alpha + dalpha, deps_p
 
 
 def wilkins(trial: np.ndarray, alpha: np.ndarray, mu: np.ndarray, sigma_y0: float, H: float):
@@ -44,23 +63,37 @@ def wilkins(trial: np.ndarray, alpha: np.ndarray, mu: np.ndarray, sigma_y0: floa
     sigma : (..., 6), alpha : (...), d_eps_p : (..., 6) plastic strain increment (engineering
     shears), yielding : (...) bool
     """
-    T = shear_intensity(trial)
-    sigma_y = sigma_y0 + H * alpha
-    yielding = SQRT3 * T > sigma_y
-    if not yielding.any():
-        return trial, alpha, np.zeros_like(trial), yielding
-    eq = SQRT3 * T
-    dalpha = np.where(yielding, (eq - sigma_y) / (3 * mu + H), 0.0)
-    scale = np.where(yielding, 1.0 - 3 * mu * dalpha / np.where(yielding, eq, 1.0), 1.0)
-    mean = trial[..., :3].mean(axis=-1, keepdims=True)
-    sigma = trial * scale[..., None]
-    sigma[..., :3] += mean * (1.0 - scale[..., None])  # the mean stress is left alone
-    # the deviator lost is 2 mu d_eps_p (tensor components; shears doubled for engineering)
-    deps_p = (trial - sigma) / (2 * np.where(yielding, mu, 1.0))[..., None]
-    deps_p[..., 3:] *= 2.0
-    return sigma, alpha + dalpha, deps_p, yielding
+    shape = trial.shape[:-1]
+    rows = np.moveaxis(trial, -1, 0).reshape(6, -1)
+    sigma, alpha_new, at, deps = return_map_rows(rows, np.broadcast_to(alpha, shape).ravel(),
+                                                 np.broadcast_to(mu, shape).ravel(), sigma_y0, H)
+    deps_p = np.zeros_like(rows)
+    deps_p[:, at] = deps
+    yielding = np.zeros(rows.shape[1], bool)
+    yielding[at] = True
+    back = lambda r: np.moveaxis(r.reshape((6,) + shape), 0, -1)
+    return back(sigma), alpha_new.reshape(shape), back(deps_p), yielding.reshape(shape)
+
+
+def return_map_rows(trial: np.ndarray, alpha: np.ndarray, mu: np.ndarray, sigma_y0: float, H: float):
+    """Wilkins' correction of stresses stored rows first, ``(6, n)``, at the points that yield
+    only: the yield test is a few operations per point, the return runs on the few that yield.
+
+    Returns ``sigma (6, n)`` (``trial`` itself if no point yields), ``alpha (n,)``, the indices
+    of the yielding points and their plastic strain increments ``(6, n_yielding)``.
+    """
+    T2 = _shear_squared(trial)
+    limit = sigma_y0 + H * alpha if H else sigma_y0
+    at = np.flatnonzero(3.0 * T2 > limit * limit)
+    if not len(at):
+        return trial, alpha, at, np.zeros((6, 0))
+    s, a, deps_p = _radial_return(trial[:, at], SQRT3 * np.sqrt(T2[at]), alpha[at], mu[at], sigma_y0, H)
+    sigma, alpha = trial.copy(), alpha.copy()
+    sigma[:, at], alpha[at] = s, a
+    return sigma, alpha, at, deps_p
 
 
 def intensity(eps_p: np.ndarray) -> np.ndarray:
     """``sqrt(2/3 eps_p : eps_p)`` of Voigt strains with engineering shears (..., 6)."""
     return np.sqrt(2.0 / 3.0 * ((eps_p[..., :3] ** 2).sum(-1) + 0.5 * (eps_p[..., 3:] ** 2).sum(-1)))
+

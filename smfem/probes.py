@@ -55,13 +55,13 @@ def stress_component_weights(R: np.ndarray, comp) -> np.ndarray:
 
 
 class PlasticStrainProbes:
-    """Equivalent plastic strain probes from the sample points (Gauss points x x3 points).
+    """Equivalent plastic strain probes from the sample points (Gauss points x the points ``x3``).
 
     A point probe interpolates bilinearly between the element's four Gauss points and linearly
     between the two nearest x3 points; ``max`` is the maximum over every sample point.
     """
 
-    def __init__(self, model, probes):
+    def __init__(self, model, probes, x3: np.ndarray):
         self.names = [p.name for p in probes]
         self.targets = []
         period = 2 * np.pi if model.body == "ring" else model.length
@@ -71,10 +71,13 @@ class PlasticStrainProbes:
                 continue
             e, xi, eta = locate(model.mesh, p.point[:2])
             wg = (1 + GAUSS_XI * xi / GAUSS_A**2) * (1 + GAUSS_ETA * eta / GAUSS_A**2) / 4
-            x3 = model.x3
-            x = p.point[2] % period if model.body == "ring" else p.point[2]
-            k = int(np.clip(np.searchsorted(x3, x), 1, len(x3) - 1))
-            lam = float(np.clip((x - x3[k - 1]) / (x3[k] - x3[k - 1]), 0.0, 1.0))
+            ring = model.body == "ring"
+            x = p.point[2] % period if ring else p.point[2]
+            # around a ring the points wrap: the neighbours of theta = 0 are the last and first
+            at = np.concatenate([[x3[-1] - period], x3, [x3[0] + period]]) if ring else x3
+            k = int(np.clip(np.searchsorted(at, x), 1, len(at) - 1))
+            lam = float(np.clip((x - at[k - 1]) / (at[k] - at[k - 1]), 0.0, 1.0))
+            k = (k - 1) % len(x3) if ring else k  # index into x3 of the upper neighbour
             self.targets.append((e, wg, k, lam))
 
     def evaluate(self, peps: np.ndarray) -> np.ndarray:
@@ -85,7 +88,7 @@ class PlasticStrainProbes:
                 out.append(peps.max())
                 continue
             e, wg, k, lam = target
-            out.append(wg @ ((1 - lam) * peps[e, :, k - 1] + lam * peps[e, :, k]))
+            out.append(wg @ ((1 - lam) * peps[e, :, k - 1] + lam * peps[e, :, k]))  # k - 1 = -1 wraps
         return np.array(out)
 
 
@@ -147,7 +150,9 @@ class CaseProbes:
         linear = [q for q in case.probes if q.field != "peps" and q.kind == "point"]
         plastic = [q for q in case.probes if q.field == "peps"]
         self.points = ProbeSet(model, linear)
-        self.plastic = PlasticStrainProbes(model, plastic) if plastic else None
+        self.plastic = None
+        if plastic and hasattr(system, "peps"):
+            self.plastic = PlasticStrainProbes(model, plastic, system.peps_x3)
         self.names = list(case.probe_names)
         self.columns = []
         for q in case.probes:

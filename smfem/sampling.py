@@ -2,92 +2,165 @@
 
 Stresses live at the 2 x 2 Gauss points ``(+-a, +-a)``, ``a = 1 / (2 sqrt 3)``, of each
 element's moment-scheme strain field ``B0 + xi B1 + eta B2`` (only the retained linear terms),
-times the quadrature points along x3. Because ``a^2 = 1/12``, the average over the four points
-of ``B_g' D B_g`` is exactly the moment-scheme stiffness, so the internal forces (14) of an
-elastic state equal ``K u``. Arrays of point data are shaped ``(n_elements, 4, n_x3, ...)``.
+times Gauss-Legendre points along x3 on the pieces between cut-out edges. Because
+``a^2 = 1/12``, the average over the four points of ``B_g' D B_g`` is exactly the moment-scheme
+stiffness, and the x3 rule integrates the products of the kept modes exactly, so the internal
+forces of an elastic state are ``K u`` with the exact coupling: the plastic strains then can
+only soften what ``K`` holds, and the iterations converge.
+
+The points cover only the fundamental domain of the modes' symmetry along x3 (prism, odd
+harmonics only: half the span; ring, harmonics that are multiples of n, cosine family only:
+0 ... pi / n), each weighted for all its images: the plastic state repeats there. Point arrays
+are shaped ``(6, n_elements, 4, n_x3)``: stress rows first, x3 last.
 """
 
 from __future__ import annotations
 
+import math
+from functools import reduce
+
 import numpy as np
 import scipy.sparse as sp
 
-from . import fourier
+from . import fourier, inhomogeneity
 from .assembly import element_dofs
 
 GAUSS_A = 0.5 / np.sqrt(3.0)
 GAUSS_XI = GAUSS_A * np.array([-1.0, 1.0, 1.0, -1.0])
 GAUSS_ETA = GAUSS_A * np.array([-1.0, -1.0, 1.0, 1.0])
+#: stress rows by basis type along x3 (0: psi1, 1: psi3)
+ROWS = (np.flatnonzero(fourier.ROW_TYPE == 0), np.flatnonzero(fourier.ROW_TYPE == 1))
 
 
-class SamplePoints:
-    """Linear maps between mode amplitudes and the stresses and forces at the sample points.
+def gauss_operators(model, elements: np.ndarray | slice = slice(None)) -> np.ndarray:
+    """``B`` of every mode at the four Gauss points of ``elements``: (n_modes, ne, 4, 6, 12)."""
+    ops = model.ops.subset(np.arange(model.mesh.n_elements)[elements])
+    out = []
+    for s in model.systems:
+        B0, B1, B2 = ops.at(fourier.wavenumber(s.mode, model.body, model.length))
+        out.append(B0[:, None] + GAUSS_XI[None, :, None, None] * B1[:, None] + GAUSS_ETA[None, :, None, None] * B2[:, None])
+    return np.stack(out)
 
-    An isotropic D couples only strain rows with the same basis function along x3, so the
-    elastic stress of a mode is ``psi(x3) * (D amplitude)``: D acts on the small per-element
-    amplitudes, never on the large point arrays.
+
+def element_scatter(model, elements: np.ndarray | slice = slice(None)) -> sp.csr_matrix:
+    """The sparse map from per-mode element-dof values (n_modes, ne, 12), raveled, to the
+    stacked reduced amplitudes; its transpose gathers the element dofs of every mode."""
+    dofs = element_dofs(model.mesh.elements[elements])
+    n_full = 3 * model.mesh.n_nodes
+    scatter = sp.csr_matrix((np.ones(dofs.size), (dofs.ravel(), np.arange(dofs.size))), shape=(n_full, dofs.size))
+    return sp.block_diag([s.T.T @ scatter for s in model.systems], format="csr")
+
+
+class Symmetry:
+    """The fundamental domain ``[0, width]`` of the modes along x3 and the images of its points.
+
+    ``copies`` images of the domain tile the period, mirrored (reflection about both ends) or
+    turned (rotation by ``width``); ``width = period`` with one copy where there is no symmetry,
+    and ``width = 0`` for an axisymmetric ring (one point stands for the whole circle).
     """
 
     def __init__(self, model):
+        case, modes = model.case, model.modes
+        self.period = 2 * math.pi if model.body == "ring" else model.length
+        self.width, self.copies, self.mirror = self.period, 1, False
+        if model.body != "ring":
+            if all(m.l % 2 == 1 for m in modes):
+                self.width, self.copies, self.mirror = self.period / 2, 2, True
+        else:
+            n = reduce(math.gcd, (m.l for m in modes))
+            mirror = {m.family for m in modes} == {"c"}
+            if n == 0:
+                self.width, self.copies, self.mirror = 0.0, 1, False
+            elif n > 1 or mirror:
+                self.width = self.period / n / (2 if mirror else 1)
+                self.copies, self.mirror = n * (2 if mirror else 1), mirror
+        if self.copies > 1 and not self._shared_by(case, model.mesh):
+            self.width, self.copies, self.mirror = self.period, 1, False
+
+    def images(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Every image of the points ``x`` over the period, sorted, and the point each is of."""
+        if self.width == 0.0:
+            return x, np.arange(len(x))
+        k = np.arange(self.copies // (2 if self.mirror else 1))
+        turned = [(x[None, :] + 2 * self.width * k[:, None]) if self.mirror else x[None, :] + self.width * k[:, None]]
+        if self.mirror:
+            turned.append(2 * self.width * (k[:, None] + 1) - x[None, :])
+        full = np.concatenate([t.ravel() for t in turned]) % self.period
+        index = np.tile(np.arange(len(x)), len(turned) * len(k))
+        order = np.argsort(full, kind="stable")
+        return full[order], index[order]
+
+    def _shared_by(self, case, mesh) -> bool:
+        """Whether the cut-outs repeat on every image of the domain (the modes' symmetry is the
+        problem's, so they should)."""
+        x = (np.arange(4096) + 0.5 * math.sqrt(2) - 0.5) * self.width / 4096
+        full, index = self.images(x)
+        return np.array_equal(inhomogeneity.element_factor(case, mesh, full),
+                              inhomogeneity.element_factor(case, mesh, x)[:, index])
+
+
+def sample_points(model, oversampling: float) -> tuple[np.ndarray, np.ndarray, Symmetry]:
+    """Points and weights along x3 over the fundamental domain (each weighted for its images),
+    ``oversampling`` times the Gauss-Legendre points that integrate the modes' products exactly."""
+    sym = Symmetry(model)
+    if sym.width == 0.0:
+        return np.zeros(1), np.full(1, sym.period), sym
+    top_k = 2 * max(fourier.wavenumber(m, model.body, model.length) for m in model.modes)
+    x, w = inhomogeneity.gauss_pieces(inhomogeneity.cut_edges(model.case, 0.0, sym.width), top_k, oversampling)
+    return x, w * sym.copies, sym
+
+
+class SamplePoints:
+    """Linear maps between mode amplitudes and stresses and forces at the sample points.
+
+    An isotropic D couples only strain rows with the same basis function along x3, so the
+    elastic stress of a mode is ``psi(x3) * (D B u)``: D acts on the small per-element
+    amplitudes; the sums over modes and points are one matrix product per row type.
+    """
+
+    def __init__(self, model, oversampling: float):
         self.model = model
-        self.x3, self.w = model.x3, model.x3_weights
-        self.factor = model.factor  # (n_elements, n_x3)
-        self.dofs = element_dofs(model.mesh.elements)
-        self.n_full = 3 * model.mesh.n_nodes
-        self.B, self.psi = [], []
-        for s in model.systems:
-            p = fourier.wavenumber(s.mode, model.body, model.length)
-            B0, B1, B2 = model.ops.at(p)
-            self.B.append(B0[:, None] + GAUSS_XI[None, :, None, None] * B1[:, None] + GAUSS_ETA[None, :, None, None] * B2[:, None])
-            psi1, psi3 = fourier.psi(s.mode, self.x3, model.body, model.length)
-            self.psi.append(np.where(fourier.ROW_TYPE[None, :] == 0, psi1[:, None], psi3[:, None]))  # (n_x3, 6)
-        self.psi_all = np.stack(self.psi)  # (n_modes, n_x3, 6)
-        self.weight = 0.25 * model.ops.sqrt_g  # per element and Gauss point
-        self.scale = self.factor[:, None, :, None]  # the contrast material's D is scaled
-        # all modes at once: B of every mode, one sparse map from element dofs of every mode to
-        # the stacked reduced amplitudes, and the x3 projection weights per stress row
-        self.B_all = np.stack(self.B)  # (n_modes, n_elements, 4, 6, 12)
-        ne = len(self.dofs)
-        scatter = sp.csr_matrix((np.ones(self.dofs.size), (self.dofs.ravel(), np.arange(self.dofs.size))),
-                                shape=(self.n_full, self.dofs.size))
-        self.G = sp.block_diag([s.T.T @ scatter for s in model.systems], format="csr")
-        self.Gt = self.G.T.tocsr()
-        self.offsets = np.cumsum([0] + [s.T.shape[1] for s in model.systems])
-        self.shape = (len(self.B), ne)
-        self.W = (self.w[None, :, None] * self.psi_all).transpose(2, 1, 0)  # (6, n_x3, n_modes)
-        self.psi_rows = np.ascontiguousarray(self.psi_all.transpose(2, 0, 1))  # (6, n_modes, n_x3)
-
-    def stress_amplitude(self, i: int, u: np.ndarray) -> np.ndarray:
-        """``D B u`` (n_elements, 4, 6) of reduced amplitudes ``u`` of mode ``i``."""
-        full = self.model.systems[i].T @ u
-        return np.einsum("rs,egsk,ek->egr", self.model.D, self.B[i], full[self.dofs])
-
-    def stress_of_mode(self, i: int, u: np.ndarray) -> np.ndarray:
-        """Elastic stresses (n_elements, 4, n_x3, 6) of amplitudes ``u`` of mode ``i``."""
-        return self.stress_amplitude(i, u)[:, :, None, :] * self.psi[i][None, None] * self.scale
-
-    def stress(self, u_modes) -> np.ndarray:
-        """Elastic stresses of all modes' amplitudes (a list of reduced vectors, or stacked)."""
-        u = np.concatenate(u_modes) if isinstance(u_modes, (list, tuple)) else u_modes
+        self.x3, self.w, self.symmetry = sample_points(model, oversampling)
+        self.factor = inhomogeneity.element_factor(model.case, model.mesh, self.x3)  # (ne, n_x3)
+        self.scale = self.factor[None, :, None, :]
+        psi = np.array([fourier.psi(s.mode, self.x3, model.body, model.length) for s in model.systems])
+        self.psi = psi.transpose(1, 0, 2).copy()  # (2, n_modes, n_x3): synthesis per row type
+        self.psi_w = (psi * self.w).transpose(1, 2, 0).copy()  # (2, n_x3, n_modes): weighted projection
+        B = gauss_operators(model)  # (n_modes, ne, 4, 6, 12)
+        self.shape = B.shape[:2]
         n_modes, ne = self.shape
-        per_element = (self.Gt @ u).reshape(n_modes, ne, 1, 12, 1)
-        amps = (self.model.D @ (self.B_all @ per_element))[..., 0]  # D B u: (n_modes, ne, 4, 6)
-        amps = amps.reshape(n_modes, ne * 4, 6).transpose(2, 1, 0)  # (6, ne*4, n_modes)
-        out = amps @ self.psi_rows  # (6, ne*4, n_x3): one matrix product per stress row
-        return out.reshape(6, ne, 4, -1).transpose(1, 2, 3, 0) * self.scale
+        # D B for the stresses of the amplitudes; B' weighted by the element's share for the forces
+        self.DB = (model.D @ B).reshape(n_modes * ne, 24, 12)
+        self.Bt = (B * (0.25 * model.ops.sqrt_g)[None, :, None, None, None]).reshape(n_modes * ne, 24, 12).transpose(0, 2, 1).copy()
+        self.G = element_scatter(model)
+        self.Gt = self.G.T.tocsr()
+        self.point_shape = (6, ne, 4, len(self.x3))
+
+    def unfolded(self, peps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The points over the whole period and a point array (..., n_x3) on them."""
+        full, index = self.symmetry.images(self.x3)
+        return full, peps[..., index]
+
+    def amplitudes(self, u: np.ndarray) -> np.ndarray:
+        """``D B u`` of stacked amplitudes at the Gauss points, rows first: (6, ne * 4, n_modes)."""
+        n_modes, ne = self.shape
+        a = (self.DB @ (self.Gt @ u).reshape(n_modes * ne, 12, 1)).reshape(n_modes, ne * 4, 6)
+        return a.transpose(2, 1, 0)
+
+    def stress(self, u: np.ndarray) -> np.ndarray:
+        """Elastic stresses (6, ne, 4, n_x3) of stacked amplitudes ``u``."""
+        a = self.amplitudes(u)
+        out = np.empty((6, a.shape[1], len(self.x3)))
+        for t, rows in enumerate(ROWS):
+            out[rows] = a[rows] @ self.psi[t]
+        return out.reshape(self.point_shape) * self.scale
 
     def forces(self, sigma: np.ndarray) -> np.ndarray:
-        """Internal force amplitudes (14) of all modes, stacked, from stresses at the points."""
+        """Internal force amplitudes (14) of all modes, stacked, of stresses at the points."""
         n_modes, ne = self.shape
-        rows = sigma.transpose(3, 0, 1, 2).reshape(6, ne * 4, -1)
-        projected = (rows @ self.W).reshape(6, ne, 4, n_modes).transpose(3, 1, 2, 0)  # (modes, ne, 4, 6)
-        per_element = (projected[..., None, :] @ self.B_all)[..., 0, :]  # (modes, ne, 4, 12)
-        per_element = per_element.sum(axis=2) * self.weight[None, :, None]
-        return self.G @ per_element.ravel()
-
-    def force_of_mode(self, i: int, sigma: np.ndarray) -> np.ndarray:
-        """Internal force amplitudes (reduced) of mode ``i`` from stresses at the points (14)."""
-        projected = np.einsum("q,qr,egqr->egr", self.w, self.psi[i], sigma)
-        per_element = np.einsum("egrk,egr,e->ek", self.B[i], projected, self.weight)
-        full = np.bincount(self.dofs.ravel(), per_element.ravel(), minlength=self.n_full)
-        return self.model.systems[i].T.T @ full
+        projected = np.empty((6, ne * 4, n_modes))
+        rows_of = sigma.reshape(6, ne * 4, -1)
+        for t, rows in enumerate(ROWS):
+            projected[rows] = rows_of[rows] @ self.psi_w[t]
+        per_gauss = projected.transpose(2, 1, 0).reshape(n_modes * ne, 24, 1)  # (mode and element, 4 x 6)
+        return self.G @ (self.Bt @ per_gauss).ravel()

@@ -3,16 +3,18 @@
 The solver chooses how to solve each step and names the choice in ``info['solve']``:
 * elastic, homogeneous along x3: decoupled harmonics, one block-diagonal factorization;
 * elastic, material varying along x3: a direct solve of the whole coupled block system if it
-  has at most ``options.direct_max_nonzeros`` nonzeros, else the block-iterative algorithm;
-* elasto-plastic: the iterations (13)-(16) of additional loads with Wilkins' correction; the
-  iteration matrix is the whole coupled elastic system where the material varies along x3 and
-  it fits (block SOR converges slowly when cut-outs couple the harmonics strongly), else the
-  paper's block SOR over the harmonics with the diagonal blocks factorized once;
+  has at most ``options.direct_max_nonzeros`` nonzeros, else the iterations below;
+* elasto-plastic: the iterations (13)-(16) of additional loads with Wilkins' correction
+  (:mod:`smfem.iterative`), with Anderson acceleration; the iteration matrix is the
+  block-diagonal elastic system of a body homogeneous along x3, the whole coupled one where
+  the material varies along x3 and it fits, else its diagonal blocks with the coupling applied
+  matrix-free (or the paper's block SOR, on request);
 * a rigid wall: the contact layer (:mod:`smfem.contact`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import numpy as np
@@ -72,22 +74,26 @@ def build_system(case, options: SolverOptions):
         return model, ContactSystem(model, case.dt, options), ContactSystem.HOW
     model = Model(case, nonlinear=plastic)
     coupled = bool(model.coupling)
-    wanted = model.coupled_nonzeros() <= options.direct_max_nonzeros if options.direct is None else options.direct
-    use_direct = coupled and wanted
-    if not plastic and (use_direct or not coupled):
+    kind = options.iteration_matrix
+    if kind == "auto":
+        kind = "coupled" if not coupled or model.coupled_nonzeros() <= options.direct_max_nonzeros else "blocks"
+    if not plastic and (kind == "coupled" or not coupled):
         K, M, Q, _, _ = stacked(model)
         how = ("direct: the coupled block system, one factorization" if coupled
                else "decoupled harmonics, one block-diagonal factorization")
         return model, LinearSystem(K, M, Q, case.dt), how
-    if not plastic:  # elastic but too large to factorize whole: the iterative path
+    if not plastic:  # elastic but not to be factorized whole: the iterations
         model = Model(case, nonlinear=True)
-    if options.sweep == "auto" and (use_direct or not coupled):
-        how = ("iterative (13)-(16) with the whole coupled elastic system as iteration matrix" if coupled else
-               f"iterative (13)-(16), all {len(model.systems)} harmonics in one block-diagonal solve per "
-               f"iteration (they do not couple through the stiffness)")
-        return model, BlockIterative(model, case.dt, options, coupled=stacked(model)[:2]), how
-    how = f"block-iterative (13)-(16): block SOR over {len(model.systems)} harmonics, omega {options.relaxation:g}"
-    return model, BlockIterative(model, case.dt, options), how
+    n = len(model.systems)
+    how = {"coupled": (f"additional loads (13)-(16), the whole coupled elastic system of {n} harmonics as iteration "
+                       "matrix" if coupled else f"additional loads (13)-(16), all {n} harmonics in one block-diagonal "
+                       "solve per iteration (they do not couple through the stiffness)"),
+           "blocks": f"additional loads (13)-(16), block Jacobi over {n} harmonics, the coupling applied matrix-free "
+                     "through the cut-outs' x3 points",
+           "sor": f"block-iterative (13)-(16): block SOR over {n} harmonics, omega {options.relaxation:g}"}[kind]
+    if kind != "sor" and options.anderson:
+        how += f", Anderson acceleration ({options.anderson} iterates)"
+    return model, BlockIterative(model, case.dt, dataclasses.replace(options, iteration_matrix=kind)), how
 
 
 def _run(case, model, system, how, progress, with_fields, cpu0) -> RunResult:
@@ -108,7 +114,7 @@ def _run(case, model, system, how, progress, with_fields, cpu0) -> RunResult:
                 continue
             iterations.append(state.iterations)
             if state.n in snapshot_steps and plastic:
-                snapshots.append(smfem_snapshot(state.n * case.dt, model, case, system.peps))
+                snapshots.append(smfem_snapshot(state.n * case.dt, model, case, system.peps, system.peps_x3))
             if progress:
                 progress(state.n, n)
     except StepFailed as exc:
@@ -123,7 +129,8 @@ def _run(case, model, system, how, progress, with_fields, cpu0) -> RunResult:
     mesh = None
     if with_fields:
         offsets = np.cumsum([0] + [s.K.shape[0] for s in model.systems])
-        mesh = field_mesh(model, np.split(state.u, offsets[1:-1]), peps=getattr(system, "peps", None))
+        plastic_points = (system.peps, system.peps_x3) if hasattr(system, "peps") else (None, None)
+        mesh = field_mesh(model, np.split(state.u, offsets[1:-1]), peps=plastic_points[0], peps_x3=plastic_points[1])
     return RunResult(
         t=np.arange(done) * case.dt, history={name: values[:done, j] for j, name in enumerate(probes.names)},
         n_dof=model.n_dof, iterations=iterations, converged=not message, message=message,

@@ -8,13 +8,13 @@ import math
 import numpy as np
 
 
-def smfem_snapshot(t: float, model, case, peps: np.ndarray) -> dict:
-    """Snapshot of SMFEM's ``peps`` (elements, section points, x3 points), element means.
+def smfem_snapshot(t: float, model, case, peps: np.ndarray, x3: np.ndarray) -> dict:
+    """Snapshot of SMFEM's ``peps`` (elements, section points, the x3 points ``x3``), element means.
 
     Each element is drawn once per x3 quadrature point as the x3 slice around that point;
     an axisymmetric section shows the largest value along x3 (they are all equal).
     """
-    X, x3, value = model.mesh.element_x(), model.x3, peps.mean(axis=1)  # (ne, 4, 2), (nq,), (ne, nq)
+    X, value = model.mesh.element_x(), peps.mean(axis=1)  # (ne, 4, 2), (nq,), (ne, nq)
     if case.body == "ring" and case.axisymmetric:
         return {"t": t, "poly": X, "peps": value.max(axis=1)}
     lo1, hi1 = X[:, :, 0].min(1), X[:, :, 0].max(1)

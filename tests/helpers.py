@@ -36,7 +36,7 @@ def element_stiffness_full(X: np.ndarray, body: str, p: float, D: np.ndarray) ->
 def full_integration_stiffness(model: Model, i: int):
     """Mode ``i``'s reduced stiffness with the fully integrated element (decoupled modes)."""
     mesh, s = model.mesh, model.systems[i]
-    Dw = assembly.weighted_elasticity(model.D, model._integrals[i, i])
+    Dw = assembly.weighted_elasticity(model.D, model.integrals(i, i))
     p = fourier.wavenumber(s.mode, model.body, model.length)
     K = assembly.assemble(element_stiffness_full(mesh.element_x(), model.body, p, Dw), mesh.elements, mesh.n_nodes)
     return (s.T.T @ K @ s.T).tocsr()

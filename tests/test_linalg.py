@@ -23,13 +23,17 @@ def test_a_rod_matrix_goes_banded_and_solves_like_lu():
     assert np.abs(x - sla.splu(A.tocsc()).solve(b)).max() <= 1e-10 * np.abs(x).max()
 
 
-def test_a_wide_band_or_an_indefinite_matrix_goes_to_lu():
+def test_a_band_wider_than_the_lu_or_an_indefinite_matrix_goes_to_lu():
+    """An arrow matrix (a full first row and column) has a band as wide as itself after any
+    banded ordering, while a minimum-degree LU of it has no fill: LU. An indefinite matrix fails
+    the Cholesky: LU, with pivoting."""
     rng = np.random.default_rng(1)
-    dense = rng.normal(size=(40, 40))
-    spd = sp.csr_matrix(dense @ dense.T + 40 * np.eye(40))  # full: no narrow band
-    indefinite = sp.diags(np.r_[np.ones(39), -1.0]).tocsr()
-    for A in (spd, indefinite):
+    arrow = sp.lil_matrix((60, 60))
+    arrow.setdiag(60.0 + rng.random(60))
+    arrow[0, 1:], arrow[1:, 0] = 1.0, 1.0
+    indefinite = sp.diags(np.r_[np.ones(59), -1.0]).tocsr()
+    for A in (sp.csr_matrix(arrow), indefinite):
         f = factorize_spd(A)
         assert not isinstance(f, BandedCholesky)
-        b = rng.normal(size=40)
+        b = rng.normal(size=60)
         assert np.allclose(A @ f.solve(b), b)
