@@ -126,48 +126,63 @@ class Model:
         diagonal = np.concatenate([s.M for s in self.systems])
         return (sp.diags(diagonal) + self.coupled_mass).tocsr() if self.coupling else diagonal
 
-    def _reduced_maps(self, dofs: np.ndarray):
-        """Per mode, the reduced column of each of ``dofs`` (-1: none) and its coefficient in T."""
-        maps = []
+    def _reduced_maps(self, dofs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per mode, the reduced column of each of ``dofs`` (-1: none) and its coefficient in T:
+        two arrays (n_modes, *dofs.shape)."""
+        cols, coefs = [], []
         for s in self.systems:
             T = s.T.tocoo()
             r, c = np.full(T.shape[0], -1), np.zeros(T.shape[0])
             r[T.row], c[T.row] = T.col, T.data
-            maps.append((r[dofs], c[dofs]))
-        return maps
+            cols.append(r[dofs]), coefs.append(c[dofs])
+        return np.stack(cols), np.stack(coefs)
 
-    def _scatter_pairs(self, pairs, values: np.ndarray, dofs: np.ndarray, maps) -> tuple:
+    def _scatter_pairs(self, pairs: np.ndarray, values: np.ndarray, maps) -> tuple:
         """COO entries on the stacked reduced amplitudes of per-pair values on full dofs:
         ``values`` (P, ..., a, b) on rows ``dofs[..., a]`` of mode i and columns ``dofs[..., b]``
-        of mode j."""
-        pi, pj = np.array(pairs).T
-        ri, ci = (np.stack([maps[i][k] for i in pi]) for k in (0, 1))
-        rj, cj = (np.stack([maps[j][k] for j in pj]) for k in (0, 1))
+        of mode j (``maps``: :meth:`_reduced_maps` of those dofs)."""
+        pi, pj = pairs.T
+        ri, ci, rj, cj = maps[0][pi], maps[1][pi], maps[0][pj], maps[1][pj]
         keep = (ri[..., :, None] >= 0) & (rj[..., None, :] >= 0) & (values != 0.0)
         at = (slice(None),) + (None,) * ri.ndim  # the pair's offsets against (P, ..., a, b)
         rows = np.broadcast_to(self.offsets[pi][at] + ri[..., :, None], keep.shape)[keep]
         cols = np.broadcast_to(self.offsets[pj][at] + rj[..., None, :], keep.shape)[keep]
         return rows, cols, (values * ci[..., :, None] * cj[..., None, :])[keep]
 
-    def _coupled_mass(self) -> sp.csr_matrix:
-        """The off-diagonal lumped mass blocks ``rho(lm)`` of every coupled pair, as one matrix:
-        a lumped mass is diagonal on the full dofs, so each block maps each cut-out node's dofs."""
+    def _assemble_pairs(self, blocks, maps) -> sp.csr_matrix:
+        """One sparse matrix of per-pair blocks: ``blocks(pairs)`` gives the values of a chunk
+        of :attr:`coupling` for :meth:`_scatter_pairs`."""
         n = int(self.offsets[-1])
-        if not self.coupling:
-            return sp.csr_matrix((n, n))
-        live = self.cutout_elements
-        nodes = np.unique(self.mesh.elements[live])
-        dofs = (3 * nodes[:, None] + np.arange(3)).reshape(-1, 1)  # (n_dofs, 1): a 1 x 1 block per dof
-        maps = self._reduced_maps(dofs)
+        pairs = np.array(self.coupling).reshape(-1, 2)
         rows, cols, vals = [], [], []
-        for start in range(0, len(self.coupling), CHUNK_PAIRS):
-            pairs = self.coupling[start:start + CHUNK_PAIRS]
-            m = np.stack([self.full_mass(i, j)[dofs] for i, j in pairs])[..., None]  # (P, n_dofs, 1, 1)
-            r, c, v = self._scatter_pairs(pairs, m, dofs, maps)
+        for start in range(0, len(pairs), CHUNK_PAIRS):
+            chunk = pairs[start:start + CHUNK_PAIRS]
+            r, c, v = self._scatter_pairs(chunk, blocks(chunk), maps)
             rows.append(r), cols.append(c), vals.append(v)
+        if not rows:
+            return sp.csr_matrix((n, n))
         M = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
         M.eliminate_zeros()
         return M
+
+    def _coupled_mass(self) -> sp.csr_matrix:
+        """The off-diagonal lumped mass blocks ``rho(lm)`` of every coupled pair, as one matrix:
+        a lumped mass is diagonal on the full dofs, so each block maps each cut-out node's dofs,
+        which get a quarter of each of their cut-out elements' ``rho(lm)`` (elsewhere it is 0)."""
+        if not self.coupling:
+            return self._assemble_pairs(None, None)
+        live = self.cutout_elements
+        nodes, where = np.unique(self.mesh.elements[live], return_inverse=True)
+        share = np.zeros((len(nodes), len(live)))
+        np.add.at(share, (where.reshape(-1, 4), np.arange(len(live))[:, None]), 0.25 * self.rho * self.ops.sqrt_g[live][:, None])
+        dofs = (3 * nodes[:, None] + np.arange(3)).reshape(-1, 1)  # (n_dofs, 1): a 1 x 1 block per dof
+
+        def blocks(pairs):
+            I = self._I[pairs[:, 0], pairs[:, 1]][:, self._profile[live]]  # (P, ne, 2, 2)
+            m = np.stack([I[..., 0, 0] @ share.T, I[..., 1, 1] @ share.T], axis=-1)  # (P, nodes, type)
+            return m[:, :, [0, 0, 1]].reshape(len(pairs), -1, 1, 1)  # in-plane as psi1, x3 as psi3
+
+        return self._assemble_pairs(blocks, self._reduced_maps(dofs))
 
     def coupled_nonzeros(self) -> int:
         """Nonzeros of the whole coupled stiffness, bounded before assembling it: an
@@ -185,33 +200,39 @@ class Model:
 
     def coupled_stiffness(self) -> sp.csr_matrix:
         """The off-diagonal stiffness blocks ``K(lm)``, l != m, of every coupled pair, as one
-        matrix on the stacked reduced amplitudes: assembled in one batched pass over the
-        cut-out elements (elsewhere different harmonics do not couple)."""
-        n = int(self.offsets[-1])
+        matrix on the stacked reduced amplitudes, assembled over the cut-out elements only
+        (elsewhere different harmonics do not couple). With ``B(p) = Ba + p Bb`` (each of the
+        moment scheme's three parts) and
+        ``D(lm) = sum_ab I_ab(lm) D_ab``, every element block is a combination of a few fixed
+        element matrices, ``K_lm = sum_n c_n(l, m) C_n``: one matrix product per element for
+        all pairs."""
         if not self.coupling:
-            return sp.csr_matrix((n, n))
+            return self._assemble_pairs(None, None)
         live = self.cutout_elements
         ops = self.ops.subset(live)
-        B = [ops.at(fourier.wavenumber(m, self.body, self.length)) for m in self.modes]
-        dofs = assembly.element_dofs(self.mesh.elements[live])  # (ne, 12)
-        maps = self._reduced_maps(dofs)
-        rows, cols, vals = [], [], []
-        for start in range(0, len(self.coupling), CHUNK_PAIRS):
-            pairs = self.coupling[start:start + CHUNK_PAIRS]
-            pi, pj = np.array(pairs).T
+        p = np.array([fourier.wavenumber(m, self.body, self.length) for m in self.modes])
+        Ba = ops.at(0.0)  # at(p) is linear in p, the dropped and free rows included
+        Bb = tuple(one - zero for one, zero in zip(ops.at(1.0), Ba))
+        C, terms = [], []
+        for a in (0, 1):
+            for b in (0, 1):
+                D = self.D * np.outer(fourier.ROW_TYPE == a, fourier.ROW_TYPE == b)
+                if not D.any():
+                    continue
+                for left, right, powers in ((Ba, Ba, (0, 0)), (Bb, Ba, (1, 0)), (Ba, Bb, (0, 1)), (Bb, Bb, (1, 1))):
+                    k = sum(w * np.einsum("eri,rs,esj->eij", L, D, R, optimize=True)
+                            for w, L, R in zip((1.0, 1 / 12, 1 / 12), left, right))
+                    C.append(k * ops.sqrt_g[:, None, None])
+                    terms.append((a, b) + powers)
+        C = np.stack(C, axis=1).reshape(len(live), len(terms), 144)
+
+        def blocks(pairs):
+            pi, pj = pairs.T
             I = self._I[pi, pj][:, self._profile[live]]  # (P, ne, 2, 2)
-            Dw = assembly.weighted_elasticity(self.D, I.reshape(-1, 2, 2)).reshape(len(pairs), len(live), 6, 6)
-            L = [np.stack([B[i][k] for i in pi]) for k in range(3)]
-            R = [np.stack([B[j][k] for j in pj]) for k in range(3)]
-            k = np.einsum("peri,pers,pesj->peij", L[0], Dw, R[0], optimize=True)
-            k += (np.einsum("peri,pers,pesj->peij", L[1], Dw, R[1], optimize=True)
-                  + np.einsum("peri,pers,pesj->peij", L[2], Dw, R[2], optimize=True)) / 12.0
-            k *= ops.sqrt_g[None, :, None, None]
-            r, c, v = self._scatter_pairs(pairs, k, dofs, maps)
-            rows.append(r), cols.append(c), vals.append(v)
-        K = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
-        K.eliminate_zeros()
-        return K
+            coef = np.stack([I[:, :, a, b] * (p[pi] ** u * p[pj] ** v)[:, None] for a, b, u, v in terms], axis=-1)
+            return (coef.transpose(1, 0, 2) @ C).transpose(1, 0, 2).reshape(len(pairs), len(live), 12, 12)
+
+        return self._assemble_pairs(blocks, self._reduced_maps(assembly.element_dofs(self.mesh.elements[live])))
 
     @staticmethod
     def _reachable(loaded: list[int], strength: np.ndarray, tol: float = 1e-12) -> list[int]:

@@ -45,7 +45,7 @@ class SolverOptions:
     tolerance: float | None = None
     max_iterations: int = 200
     direct_max_nonzeros: int = 40_000_000
-    x3_oversampling: float = 2.0
+    x3_oversampling: float = 1.0
     layer_points_per_harmonic: int = 8
     max_state_iterations: int = 60
 
