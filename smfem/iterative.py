@@ -8,8 +8,10 @@ the harmonic coupling of the cut-outs included (:class:`smfem.coupling.StackedOp
 the plastic strains live at the sample points (:mod:`smfem.sampling`), where the trial
 stresses of the step's displacement increment are returned to the yield surface by Wilkins'
 correction (16). ``A``, the iteration matrix, is the whole coupled ``K + a0 M`` factorized
-once (exact for an elastic step: one iteration and a check), its diagonal blocks (block
-Jacobi, the coupling only in the residual), or the paper's block SOR over the harmonics, where
+once (exact for an elastic step: one iteration and a check), the same system solved by
+conjugate gradients with the coupling applied matrix-free and the diagonal blocks as
+preconditioner (to a relative residual of 1e-3: the outer iterations do the rest), or the
+paper's block SOR over the harmonics, where
 within a sweep the stresses follow each block's update elastically (15). Anderson
 acceleration (Walker & Ni 2011) combines the last iterates. A step has converged when the
 correction of an iteration, ``A^-1`` times the residual, is below ``tol`` relative to the
@@ -35,6 +37,11 @@ from .newmark import Constants, StepFailed
 from .options import SolverOptions
 from .plasticity import intensity, return_map_rows
 from .sampling import SamplePoints
+
+
+#: relative residual to which conjugate gradients solve a correction ('matrix-free'), and their
+#: iteration limit: the outer iterations converge by this factor each, so it need not be tight
+KRYLOV_RTOL, KRYLOV_MAX = 1e-3, 500
 
 
 class NotConverged(StepFailed):
@@ -88,7 +95,7 @@ class BlockIterative:
     ----------
     model : a :class:`smfem.model.Model` built with ``nonlinear=True``
     dt : time step, s
-    options : the iteration matrix (``'coupled'``, ``'blocks'`` or ``'sor'``: not ``'auto'``,
+    options : the iteration matrix (``'coupled'``, ``'matrix-free'`` or ``'sor'``: not ``'auto'``,
         which :func:`smfem.solver.build_system` resolves), Anderson memory, relaxation,
         tolerance, iteration limit and sample points along x3
     """
@@ -108,8 +115,14 @@ class BlockIterative:
             A = model.coupled_stiffness() + c.a0 * model.coupled_mass if model.coupling else None
             blocks = sp.block_diag([s.K + sp.diags(c.a0 * s.M) for s in S], format="csr")
             self.lus = [factorize_spd(blocks if A is None else blocks + A)]
-        else:  # 'blocks' and 'sor': one factorization per diagonal block
+        else:  # 'matrix-free' and 'sor': one factorization per diagonal block
             self.lus = [factorize_spd(s.K + sp.diags(c.a0 * s.M)) for s in S]
+        if self.kind == "matrix-free":
+            n, o = len(self.Q), self.offsets
+            self.A = sla.LinearOperator((n, n), matvec=lambda v: self.op.K(v) + c.a0 * self.op.M(v), dtype=float)
+            self.blocks = sla.LinearOperator((n, n), dtype=float, matvec=lambda r: np.concatenate(
+                [lu.solve(r[o[i]:o[i + 1]]) for i, lu in enumerate(self.lus)]))
+            self.krylov_iterations = 0
         if self.kind == "sor":  # the rows of each mode of the stacked matrices
             K = sp.block_diag([s.K for s in S], format="csr") + (model.coupled_stiffness() if model.coupling else 0)
             M = model.mass_matrix()
@@ -154,7 +167,10 @@ class BlockIterative:
         """Nothing to watch between steps."""
 
     def report(self) -> tuple[str, dict]:
-        return "", {"n_x3_points": len(self.points.x3), "time_breakdown_s": dict(self.timings)}
+        facts = {"n_x3_points": len(self.points.x3), "time_breakdown_s": dict(self.timings)}
+        if self.kind == "matrix-free":
+            facts["krylov_iterations"] = self.krylov_iterations
+        return "", facts
 
     def residual(self, x: np.ndarray, predicted: np.ndarray, loads: np.ndarray) -> np.ndarray:
         return self.Q + loads - self.op.K(x) - self.c.a0 * self.op.M(x - predicted)
@@ -163,10 +179,13 @@ class BlockIterative:
         """``A^-1`` times the residual at ``x`` (for ``'sor'``: one block SOR sweep's change)."""
         if self.kind == "coupled":
             return self.lus[0].solve(self.residual(x, predicted, loads))
+        if self.kind == "matrix-free":
+            count = []
+            dx, _ = sla.cg(self.A, self.residual(x, predicted, loads), rtol=KRYLOV_RTOL, M=self.blocks,
+                           maxiter=KRYLOV_MAX, callback=count.append)
+            self.krylov_iterations += len(count)
+            return dx
         o = self.offsets
-        if self.kind == "blocks":
-            r = self.residual(x, predicted, loads)
-            return np.concatenate([lu.solve(r[o[i]:o[i + 1]]) for i, lu in enumerate(self.lus)])
         new = x.copy()
         for i, (lu, (K, a0M)) in enumerate(zip(self.lus, self.rows)):
             r = self.Q[o[i]:o[i + 1]] + loads[o[i]:o[i + 1]] - K @ new - a0M @ (new - predicted)

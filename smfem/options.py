@@ -16,12 +16,14 @@ class SolverOptions:
     ----------
     iteration_matrix : what a nonlinear step's iterations solve with (the residual is always the
         exact one, the harmonic coupling included): ``'coupled'``, the whole coupled elastic
-        ``K + a0 M`` factorized once; ``'blocks'``, the per-harmonic diagonal blocks (block
-        Jacobi, the coupling only in the residual: matrix-free); ``'sor'``, the paper's block
-        SOR over the harmonics; ``'auto'``: ``'coupled'`` where the body is homogeneous along x3
-        (block-diagonal, one solve) or the coupled matrix has at most ``direct_max_nonzeros``
-        nonzeros, else ``'blocks'``. An elastic body with cut-outs is solved directly (one
-        factorization) under ``'auto'`` and ``'coupled'``, by the iterations otherwise.
+        ``K + a0 M`` factorized once; ``'matrix-free'``, that system solved by conjugate gradients
+        with the coupling applied through the cut-outs' x3 points and the per-harmonic diagonal
+        blocks, factorized, as preconditioner (memory grows linearly with the harmonics);
+        ``'sor'``, the paper's block SOR over the harmonics; ``'auto'``: ``'coupled'`` where the
+        body is homogeneous along x3 (block-diagonal, one solve) or the coupled matrix has at
+        most ``direct_max_nonzeros`` nonzeros, else ``'matrix-free'``. An elastic body with
+        cut-outs is solved directly (one factorization) under ``'auto'`` and ``'coupled'``, by
+        the iterations otherwise.
     anderson : iterates an Anderson acceleration of the iterations remembers (0: the plain
         iteration, the paper's; not with ``'sor'``)
     relaxation : omega of the block SOR over the harmonics (1: Gauss-Seidel)
@@ -53,7 +55,7 @@ class SolverOptions:
         return self.tolerance if self.tolerance is not None else case.params["tol"]
 
     def __post_init__(self):
-        if self.iteration_matrix not in ("auto", "coupled", "blocks", "sor"):
-            raise ValueError(f"iteration_matrix={self.iteration_matrix!r}: 'auto', 'coupled', 'blocks' or 'sor'")
+        if self.iteration_matrix not in ("auto", "coupled", "matrix-free", "sor"):
+            raise ValueError(f"iteration_matrix={self.iteration_matrix!r}: 'auto', 'coupled', 'matrix-free' or 'sor'")
         if self.x3_oversampling < 1.0:
             raise ValueError(f"x3_oversampling={self.x3_oversampling}: at least 1 (fewer points are not exact)")

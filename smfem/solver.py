@@ -7,8 +7,9 @@ The solver chooses how to solve each step and names the choice in ``info['solve'
 * elasto-plastic: the iterations (13)-(16) of additional loads with Wilkins' correction
   (:mod:`smfem.iterative`), with Anderson acceleration; the iteration matrix is the
   block-diagonal elastic system of a body homogeneous along x3, the whole coupled one where
-  the material varies along x3 and it fits, else its diagonal blocks with the coupling applied
-  matrix-free (or the paper's block SOR, on request);
+  the material varies along x3 and it fits, else that system by conjugate gradients with the
+  coupling applied matrix-free and the diagonal blocks as preconditioner (or the paper's block
+  SOR, on request);
 * a rigid wall: the contact layer (:mod:`smfem.contact`).
 """
 
@@ -76,7 +77,7 @@ def build_system(case, options: SolverOptions):
     coupled = bool(model.coupling)
     kind = options.iteration_matrix
     if kind == "auto":
-        kind = "coupled" if not coupled or model.coupled_nonzeros() <= options.direct_max_nonzeros else "blocks"
+        kind = "coupled" if not coupled or model.coupled_nonzeros() <= options.direct_max_nonzeros else "matrix-free"
     if not plastic and (kind == "coupled" or not coupled):
         K, M, Q, _, _ = stacked(model)
         how = ("direct: the coupled block system, one factorization" if coupled
@@ -88,8 +89,9 @@ def build_system(case, options: SolverOptions):
     how = {"coupled": (f"additional loads (13)-(16), the whole coupled elastic system of {n} harmonics as iteration "
                        "matrix" if coupled else f"additional loads (13)-(16), all {n} harmonics in one block-diagonal "
                        "solve per iteration (they do not couple through the stiffness)"),
-           "blocks": f"additional loads (13)-(16), block Jacobi over {n} harmonics, the coupling applied matrix-free "
-                     "through the cut-outs' x3 points",
+           "matrix-free": f"additional loads (13)-(16), conjugate gradients on the coupled system of {n} harmonics, "
+                          "the coupling applied matrix-free through the cut-outs' x3 points, the diagonal blocks as "
+                          "preconditioner",
            "sor": f"block-iterative (13)-(16): block SOR over {n} harmonics, omega {options.relaxation:g}"}[kind]
     if kind != "sor" and options.anderson:
         how += f", Anderson acceleration ({options.anderson} iterates)"
