@@ -31,6 +31,7 @@ import scipy.sparse.linalg as sla
 
 from cases.material import lame
 
+from . import woodbury
 from .coupling import StackedOperator
 from .linalg import factorize_spd
 from .newmark import Constants, StepFailed
@@ -42,6 +43,18 @@ from .sampling import SamplePoints
 #: relative residual to which conjugate gradients solve a correction ('matrix-free'), and their
 #: iteration limit: the outer iterations converge by this factor each, so it need not be tight
 KRYLOV_RTOL, KRYLOV_MAX = 1e-3, 500
+
+
+def factorize_coupled(model, a0: float):
+    """A factorization of the stacked ``K + a0 M`` of all modes: block-diagonal where the
+    harmonics do not couple; with short cut-outs the Woodbury form where its rank is the
+    smaller (:mod:`smfem.woodbury`); else the assembled coupled matrix."""
+    blocks = sp.block_diag([s.K + sp.diags(a0 * s.M) for s in model.systems], format="csr")
+    if not model.coupling:
+        return factorize_spd(blocks)
+    if woodbury.preferred(model):
+        return woodbury.CutoutWoodbury(model, a0)
+    return factorize_spd(blocks + model.coupled_stiffness() + a0 * model.coupled_mass)
 
 
 class NotConverged(StepFailed):
@@ -112,9 +125,7 @@ class BlockIterative:
         self.offsets = model.offsets
         self.Q = np.concatenate([s.Q for s in S])
         if self.kind == "coupled":
-            A = model.coupled_stiffness() + c.a0 * model.coupled_mass if model.coupling else None
-            blocks = sp.block_diag([s.K + sp.diags(c.a0 * s.M) for s in S], format="csr")
-            self.lus = [factorize_spd(blocks if A is None else blocks + A)]
+            self.lus = [factorize_coupled(model, c.a0)]
         else:  # 'matrix-free' and 'sor': one factorization per diagonal block
             self.lus = [factorize_spd(s.K + sp.diags(c.a0 * s.M)) for s in S]
         if self.kind == "matrix-free":

@@ -23,6 +23,7 @@ import scipy.sparse as sp
 
 from cases.result import RunResult
 
+from . import woodbury
 from .contact import ContactSystem
 from .fields import field_mesh
 from .iterative import BlockIterative
@@ -76,8 +77,10 @@ def build_system(case, options: SolverOptions):
     model = Model(case, nonlinear=plastic)
     coupled = bool(model.coupling)
     kind = options.iteration_matrix
+    low_rank = coupled and woodbury.preferred(model)
     if kind == "auto":
-        kind = "coupled" if not coupled or model.coupled_nonzeros() <= options.direct_max_nonzeros else "matrix-free"
+        fits = not coupled or low_rank or model.coupled_nonzeros() <= options.direct_max_nonzeros
+        kind = "coupled" if fits else "matrix-free"
     if not plastic and (kind == "coupled" or not coupled):
         K, M, Q, _, _ = stacked(model)
         how = ("direct: the coupled block system, one factorization" if coupled
@@ -87,7 +90,8 @@ def build_system(case, options: SolverOptions):
         model = Model(case, nonlinear=True)
     n = len(model.systems)
     how = {"coupled": (f"additional loads (13)-(16), the whole coupled elastic system of {n} harmonics as iteration "
-                       "matrix" if coupled else f"additional loads (13)-(16), all {n} harmonics in one block-diagonal "
+                       "matrix" + (" (block-diagonal plus the cut-outs' low-rank correction, Woodbury)" if low_rank else "")
+                       if coupled else f"additional loads (13)-(16), all {n} harmonics in one block-diagonal "
                        "solve per iteration (they do not couple through the stiffness)"),
            "matrix-free": f"additional loads (13)-(16), conjugate gradients on the coupled system of {n} harmonics, "
                           "the coupling applied matrix-free through the cut-outs' x3 points, the diagonal blocks as "

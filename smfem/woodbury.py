@@ -1,0 +1,174 @@
+"""The coupled ``K + a0 M`` of a body with short cut-outs: block-diagonal plus low rank (Woodbury).
+
+``A = A_h + dA``: ``A_h`` is the body without cut-outs (f = 1), block-diagonal over the modes;
+``dA`` carries ``f - 1``, nonzero only in the cut-out elements over the cut-outs' x3 intervals.
+At a Gauss-Legendre point ``q`` of those intervals the strains of every mode together are
+``Ba U(q) + Bb' U'(q)``, with ``U(q)`` the synthesized displacement of the cut-out nodes and
+``U'`` its x3 derivative, so ``dA = sum_q w_q Z_q' H_q Z_q`` with ``Z_q x = (U(q), U'(q))`` and
+``H_q`` the ``(f - 1)``-weighted energy of the cut-out elements in those nodal values (moment-
+scheme stiffness and lumped mass). Its rank is at most the points times twice the cut-out
+dofs, however many harmonics there are: the notched strip at 400 harmonics couples 4800
+amplitudes through the notch, of rank 1968. With ``H_q = -F_q F_q'`` (``f < 1``) and
+``V = F' Z``: ``A = A_h - V'V`` and ``A^-1 = A_h^-1 + A_h^-1 V' S^-1 V A_h^-1``,
+``S = I - V A_h^-1 V'``, symmetric positive definite, Cholesky-factorized once. A solve is two
+block-diagonal solves, the synthesis at the cut-out points and one dense solve of the rank's
+size, against a sparse factorization whose fill grows with the square of the modes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.linalg as la
+import scipy.sparse as sp
+
+from . import fourier
+from .linalg import factorize_spd
+from .sampling import GAUSS_ETA, GAUSS_XI
+
+
+def cutout_points(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The cut-out elements' x3 points: ``x3``, weights and ``f - 1`` per element (ne, nq)."""
+    live = model.cutout_elements
+    inside = (model.factor[live] != 1.0).any(axis=0)
+    return model.x3[inside], model.x3_weights[inside], model.factor[np.ix_(live, inside)] - 1.0
+
+
+def cutout_dofs(model) -> np.ndarray:
+    """Full dofs of the cut-out elements' nodes that some mode carries."""
+    nodes = np.unique(model.mesh.elements[model.cutout_elements])
+    dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
+    carried = np.zeros(len(dofs), bool)
+    for s in model.systems:
+        carried |= np.asarray(abs(s.T[dofs]).sum(axis=1)).ravel() > 0
+    return dofs[carried]
+
+
+def rank_bound(model) -> int:
+    """The most the correction's rank can be: points times values and derivatives per dof."""
+    return len(cutout_points(model)[0]) * 2 * len(cutout_dofs(model))
+
+
+def preferred(model) -> bool:
+    """Whether the low-rank form is the cheaper: its rank at most half the coupled unknowns."""
+    return bool(model.coupling) and rank_bound(model) <= 0.5 * len(model.systems) * len(cutout_dofs(model))
+
+
+class CutoutWoodbury:
+    """``solve(b)`` with the coupled elastic ``K + a0 M`` of ``model``, as described above."""
+
+    def __init__(self, model, a0: float):
+        S = model.systems
+        x3, w, excess = cutout_points(model)
+        dofs = cutout_dofs(model)
+        n_dof, n_q = len(dofs), len(x3)
+        comp_type = (dofs % 3 == 2).astype(int)  # in-plane components go as psi1, the x3 one as psi3
+        # basis values and x3 derivatives per mode, point and dof: d/dx psi(p x) = p psi(p x + pi / 2)
+        p = np.array([fourier.wavenumber(s.mode, model.body, model.length) for s in S])
+        value = np.array([fourier.psi(s.mode, x3, model.body, model.length) for s in S])  # (modes, 2, nq)
+        slope = np.array([k * np.array(fourier.psi(s.mode, x3 + (math.pi / (2 * k) if k else 0.0), model.body, model.length))
+                          for s, k in zip(S, p)])
+        self.value, self.slope = value[:, comp_type].transpose(0, 2, 1), slope[:, comp_type].transpose(0, 2, 1)  # (modes, nq, dofs)
+        E = [sp.csr_matrix(s.T[dofs]) for s in S]  # reduced -> cut-out dofs, per mode
+        self.E = sp.block_diag(E, format="csr")  # stacked amplitudes -> (modes, dofs)
+        self.Et = self.E.T.tocsr()
+        H = self._energies(model, a0, dofs, comp_type, excess)  # (nq, 2 dofs, 2 dofs), f - 1 < 0
+        # -w_q H_q = F_q F_q': the correction's factors, each point's padded to a common rank
+        lam, Y = np.linalg.eigh(-w[:, None, None] * H)
+        keep = lam > 1e-12 * lam.max()
+        rank = int(keep.sum(axis=1).max())
+        order = np.argsort(-lam, axis=1)[:, :rank]
+        lam, Y = np.take_along_axis(lam, order, 1), np.take_along_axis(Y, order[:, None, :], 2)
+        self.F = Y * np.sqrt(np.where(np.take_along_axis(keep, order, 1), lam, 0.0))[:, None, :]  # (nq, 2 dofs, rank)
+        self.offsets, self.n_dof = model.offsets, n_dof
+        # A_h: the body without cut-outs, block-diagonal
+        blocks = [model.reduced_blocks(i, homogeneous=True) for i in range(len(S))]
+        self.base = factorize_spd(sp.block_diag([k + sp.diags(a0 * m) for k, m in blocks], format="csr"))
+        # S = I - V A_h^-1 V' = I - sum_l W_l G_l W_l', G_l the cut-out dofs' block of A_l^-1
+        lus = [factorize_spd(k + sp.diags(a0 * m)) for k, m in blocks]
+        Y = []
+        for i, (lu, Ei) in enumerate(zip(lus, E)):
+            lam, Q = np.linalg.eigh(Ei @ lu.solve(Ei.T.toarray()))  # G_l, semidefinite where a mode lacks a dof
+            root = Q * np.sqrt(np.clip(lam, 0.0, None))  # G_l = root root'
+            W = (np.einsum("qdr,qd->qrd", self.F[:, :n_dof], self.value[i], optimize=True)
+                 + np.einsum("qdr,qd->qrd", self.F[:, n_dof:], self.slope[i], optimize=True)).reshape(-1, n_dof)
+            Y.append(W @ root)
+        Y = np.hstack(Y)
+        # I - Y Y' in the lower triangle, one symmetric rank-k update
+        capacitance = la.blas.dsyrk(-1.0, Y, beta=1.0, c=np.eye(len(Y)), lower=1)
+        self.chol = la.cho_factor(capacitance, lower=True, check_finite=False, overwrite_a=True)
+        self.rank, self.n_modes = len(Y), len(S)
+
+    @staticmethod
+    def _energies(model, a0, dofs, comp_type, excess):
+        """``H_q`` (nq, 2 n, 2 n) on ``(U, U')`` of the cut-out dofs: the (f - 1)-weighted
+        moment-scheme stiffness, ``Ba U + Bb' U'`` at the four Gauss points, and lumped mass."""
+        live = model.cutout_elements
+        ops = model.ops.subset(live)
+        Ba = ops.at(0.0)
+        Bb = tuple(one - zero for one, zero in zip(ops.at(1.0), Ba))
+        gauss = lambda B: B[0][:, None] + GAUSS_XI[None, :, None, None] * B[1][:, None] + GAUSS_ETA[None, :, None, None] * B[2][:, None]
+        Ba, Bb = gauss(Ba), gauss(Bb)  # (ne, 4, 6, 12)
+        # Bb acts on the x3 derivative: a row varies as psi_row(p x), its derivative term as
+        # p psi_comp(p x + pi / 2), which is +-psi_row: the sign per row and component type
+        sign = _derivative_signs(model)
+        comp_type = (np.tile(np.arange(3), 4) == 2).astype(int)  # element dof -> its component's type
+        linked = fourier.ROW_TYPE[:, None] != comp_type[None, :]
+        if np.any(Ba[..., linked]) or np.any(Bb[..., ~linked]):
+            raise ValueError("a strain row mixes basis types: no nodal form along x3")
+        Bb = Bb * sign[fourier.ROW_TYPE][:, comp_type]
+        B = np.concatenate([Ba, Bb], axis=3)  # (ne, 4, 6, 24): on (U_e, U'_e)
+        k = 0.25 * np.einsum("e,egri,rs,egsj->eij", ops.sqrt_g, B, model.D, B, optimize=True)
+        k[:, np.arange(12), np.arange(12)] += a0 * model.rho * 0.25 * ops.sqrt_g[:, None]  # lumped mass on U
+        # scatter each element's (U_e, U'_e) into the cut-out dofs' (U, U')
+        where = {d: i for i, d in enumerate(dofs)}
+        n = len(dofs)
+        local = (3 * model.mesh.elements[live][:, :, None] + np.arange(3)).reshape(len(live), 12)
+        index = np.array([[where.get(d, -1) for d in row] for row in local])
+        index = np.concatenate([index, np.where(index >= 0, index + n, -1)], axis=1)  # (ne, 24)
+        H = np.zeros((excess.shape[1], 2 * n, 2 * n))
+        for e in range(len(live)):
+            ok = index[e] >= 0
+            block = k[e][np.ix_(ok, ok)]
+            at = index[e][ok]
+            H[:, at[:, None], at[None, :]] += excess[e][:, None, None] * block[None]
+        return H
+
+    def _V(self, x: np.ndarray) -> np.ndarray:
+        """``V x`` (nq, rank) of stacked amplitudes."""
+        N = (self.E @ x).reshape(self.n_modes, self.n_dof)
+        U = np.einsum("lqd,ld->qd", self.value, N, optimize=True)
+        dU = np.einsum("lqd,ld->qd", self.slope, N, optimize=True)
+        n = self.n_dof
+        return np.einsum("qdr,qd->qr", self.F[:, :n], U) + np.einsum("qdr,qd->qr", self.F[:, n:], dU)
+
+    def _Vt(self, y: np.ndarray) -> np.ndarray:
+        """``V' y`` of ``y`` (nq, rank), stacked amplitudes."""
+        n = self.n_dof
+        U, dU = np.einsum("qdr,qr->qd", self.F[:, :n], y), np.einsum("qdr,qr->qd", self.F[:, n:], y)
+        N = np.einsum("lqd,qd->ld", self.value, U, optimize=True) + np.einsum("lqd,qd->ld", self.slope, dU, optimize=True)
+        return self.Et @ N.ravel()
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        y = self.base.solve(b)
+        v = self._V(y)
+        z = la.cho_solve(self.chol, v.ravel(), check_finite=False).reshape(v.shape)
+        return y + self.base.solve(self._Vt(z))
+
+
+def _derivative_signs(model) -> np.ndarray:
+    """``s[row type, component type]`` with ``psi_row(p x) = s psi_comp(p x + pi / 2)`` for the
+    types that a derivative along x3 links (the others are unused); the same for every mode,
+    checked on each."""
+    x = np.array([0.3, 1.1])
+    s = np.zeros((2, 2))
+    for m in (mode for mode in model.modes if mode.l > 0):
+        k = fourier.wavenumber(m, model.body, model.length)
+        at, shifted = fourier.psi(m, x / k, model.body, model.length), fourier.psi(m, x / k + math.pi / (2 * k), model.body, model.length)
+        for r, c in ((0, 1), (1, 0)):
+            ratio = at[r] / shifted[c]
+            if not np.allclose(ratio, ratio[0]) or not np.isclose(abs(ratio[0]), 1.0) or s[r, c] == -np.sign(ratio[0]):
+                raise ValueError(f"mode {m}: the x3 derivative does not map psi{c} onto psi{r} alike for every mode")
+            s[r, c] = np.sign(ratio[0])
+    return s
