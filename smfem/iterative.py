@@ -120,7 +120,7 @@ class BlockIterative:
         self.tol, self.max_iter = options.tolerance_for(model.case), options.max_iterations
         self.c = c = Constants.of(dt)
         self.op = StackedOperator(model)
-        self.points = SamplePoints(model, options.x3_oversampling)
+        self.points = SamplePoints(model, options.x3_oversampling, options.x3_min_points)
         S = model.systems
         self.offsets = model.offsets
         self.Q = np.concatenate([s.Q for s in S])

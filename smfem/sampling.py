@@ -99,14 +99,19 @@ class Symmetry:
                               inhomogeneity.element_factor(case, mesh, x)[:, index])
 
 
-def sample_points(model, oversampling: float) -> tuple[np.ndarray, np.ndarray, Symmetry]:
-    """Points and weights along x3 over the fundamental domain (each weighted for its images),
-    ``oversampling`` times the Gauss-Legendre points that integrate the modes' products exactly."""
+def sample_points(model, oversampling: float, at_least: int = 0) -> tuple[np.ndarray, np.ndarray, Symmetry]:
+    """Points and weights along x3 over the fundamental domain (each weighted for its images):
+    ``oversampling`` times the Gauss-Legendre points that integrate the modes' products exactly,
+    and more where that makes fewer than ``at_least`` (few harmonics still have plastic zones to
+    resolve along x3)."""
     sym = Symmetry(model)
     if sym.width == 0.0:
         return np.zeros(1), np.full(1, sym.period), sym
     top_k = 2 * max(fourier.wavenumber(m, model.body, model.length) for m in model.modes)
-    x, w = inhomogeneity.gauss_pieces(inhomogeneity.cut_edges(model.case, 0.0, sym.width), top_k, oversampling)
+    edges = inhomogeneity.cut_edges(model.case, 0.0, sym.width)
+    x, w = inhomogeneity.gauss_pieces(edges, top_k, oversampling)
+    if len(x) < at_least:
+        x, w = inhomogeneity.gauss_pieces(edges, top_k, oversampling * at_least / len(x))
     return x, w * sym.copies, sym
 
 
@@ -118,9 +123,9 @@ class SamplePoints:
     amplitudes; the sums over modes and points are one matrix product per row type.
     """
 
-    def __init__(self, model, oversampling: float):
+    def __init__(self, model, oversampling: float, at_least: int = 0):
         self.model = model
-        self.x3, self.w, self.symmetry = sample_points(model, oversampling)
+        self.x3, self.w, self.symmetry = sample_points(model, oversampling, at_least)
         self.factor = inhomogeneity.element_factor(model.case, model.mesh, self.x3)  # (ne, n_x3)
         self.scale = self.factor[None, :, None, :]
         psi = np.array([fourier.psi(s.mode, self.x3, model.body, model.length) for s in model.systems])
