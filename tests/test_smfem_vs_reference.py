@@ -82,7 +82,8 @@ def test_plastic_notched_displacements_within_five_percent(name, smfem_sets, ref
         if not probe.startswith("peps"):
             assert error(h, r.history[probe]) < 0.05, probe
     if name == "notched_cylinder":
-        # the zones themselves agree: areas measured +1.5 %, +0.2 %, -6.7 % at 6, 8, 10 ms
+        # the zones themselves agree: areas measured -4.3 %, +1.5 %, -5.3 % at 6, 8, 10 ms (256 x3
+        # points; on 66 the early zone was 18 % small: SolverOptions.x3_min_points)
         for a, b in zip(s.snapshots, r.snapshots, strict=True):
             assert abs(plastic_area(a) / plastic_area(b) - 1) < 0.10, a["t"]
 
