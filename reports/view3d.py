@@ -14,7 +14,10 @@ def render_field(vtu: Path, png: Path, title: str) -> Path:
     """Deformed body (displacement magnified) coloured by the plastic strain where the run has
     one, else by the displacement magnitude."""
     import pyvista as pv
+    from vtkmodules.vtkCommonCore import vtkLogger
 
+    # off-screen rendering needs no X server, but VTK warns about the missing one on every run
+    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
     mesh = pv.read(vtu)
     u = mesh.point_data["displacement"]
     umax = float(np.linalg.norm(u, axis=1).max())

@@ -276,3 +276,20 @@ def test_stability_section_renders_the_cached_table(tmp_path):
     assert (tmp_path / "tables" / "stability.csv").exists()
     assert stability(SimpleNamespace(settings="tiny", out=tmp_path)) == []
     assert stability in EXTRA_SECTIONS  # the report renders it after the cases
+
+
+def test_the_3d_view_renders_without_library_noise(tmp_path):
+    """Off-screen rendering needs no X server; VTK's warning about the missing one stays off
+    the terminal (a fresh interpreter: the logger setting is per process)."""
+    import sys
+
+    import meshio
+
+    box = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], float)[[0, 1, 3, 2, 4, 5, 7, 6]]
+    vtu = tmp_path / "box.vtu"
+    meshio.write(vtu, meshio.Mesh(box, [("hexahedron", np.arange(8)[None])], point_data={"displacement": 0.1 * box}))
+    code = f"from reports.view3d import render_field; render_field({str(vtu)!r}, {str(tmp_path / 'box.png')!r}, 'box')"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "box.png").stat().st_size > 1000
+    assert "X server" not in done.stderr and "WARN" not in done.stderr, done.stderr
