@@ -29,6 +29,8 @@ class RunResult:
         ``solve`` lists its own)
     snapshots : plastic strain at the case's plastic-zone times (``{'t', 'poly', 'peps'}``, see
         :mod:`runs.zones`)
+    frames : ``(t, mesh)`` of the field every N steps, t = 0 included, when a time series was
+        asked for (``--every N``); else empty
     """
 
     t: np.ndarray
@@ -41,3 +43,4 @@ class RunResult:
     mesh: meshio.Mesh | None = None
     info: dict = field(default_factory=dict)
     snapshots: list = field(default_factory=list)
+    frames: list = field(default_factory=list)

@@ -10,7 +10,7 @@ from cases import get_case, parse_sets
 from runs.files import write_run
 from runs.registry import REFERENCE, SMFEM, solve
 
-from .usage import EXIT_NOT_CONVERGED, add_sets, check_writable
+from .usage import EXIT_NOT_CONVERGED, UsageError, add_sets, check_writable
 
 
 def add(sub) -> None:
@@ -20,12 +20,16 @@ def add(sub) -> None:
     add_sets(run)
     run.add_argument("--out", default=None, help="output directory (default: out/CASE-SOLVER)")
     run.add_argument("--no-fields", action="store_true", help="do not write fields.vtu")
+    run.add_argument("--every", type=int, default=0, metavar="N",
+                     help="also write fields.pvd, a ParaView time series with the field every N steps")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(handler=command)
 
 
 def command(args) -> int:
     case = get_case(args.case, parse_sets(args.sets))
+    if args.every < 0 or args.every > case.n_steps:
+        raise UsageError(f"--every {args.every}: between 1 and the case's {case.n_steps} steps (0: no time series)")
     out = Path(args.out or f"out/{case.name}-{args.solver}")
     check_writable(out)
     from tqdm import tqdm
@@ -35,7 +39,7 @@ def command(args) -> int:
     wall0 = time.perf_counter()
     try:
         result = solve(args.solver, case, progress=lambda step, n: bar.update(step - bar.n),
-                       fields=not args.no_fields)
+                       fields=not args.no_fields, every=args.every)
     finally:
         bar.close()
     write_run(out, case, args.solver, result, time.perf_counter() - wall0)

@@ -30,13 +30,14 @@ def _system(model: Model, c: float):
     return Plastic(model, c, model.case.params["tol"]) if mat.plastic else Elastic(model, c)
 
 
-def solve(case, progress: Callable[[int, int], None] | None = None) -> RunResult:
+def solve(case, progress: Callable[[int, int], None] | None = None, every: int = 0) -> RunResult:
     """Transient response of ``case`` over its time window, Newmark (alpha 0.25, delta 0.5).
 
     Parameters
     ----------
     case : cases.Case
     progress : optional ``callable(step, n_steps)`` called after every step
+    every : also the field every ``every`` steps, t = 0 included (``frames``; 0: none)
 
     Returns
     -------
@@ -44,7 +45,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> RunResult
         ``iterations``: Newton iterations per step (1 for a linear step; with a wall, the
         active-set iterations); ``cpu_time_s``: assembly, factorization and time stepping, mesh
         generation excluded; ``mesh``: the final state (cartesian points; point data
-        'displacement'; cell data 'peps', the element mean, when plastic); ``info``: 'dim',
+        'displacement', 'velocity'; cell data 'peps', the element mean, when plastic); ``info``: 'dim',
         'representation', 'element', 'n_elements', 'intorder', 'counts' (elements per mesh
         direction), 'factorizations' (of K + a0 M and of tangents), 'cpu_mesh_s'; with a wall
         also 'contact_nodes', 'energy_before' and 'energy_after' (kinetic + strain, J, at t = 0
@@ -74,6 +75,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> RunResult
     if log:
         log.record(0.0, zero, v0, u_full)
     times, rows, iterations = [0.0], [probes.values(u_full, system, v_full)], []
+    frames = [(0.0, output_mesh(model, u_full, system, v_full))] if every else []
     converged, message = True, ""
     zone_steps = {int(round(t / dt)) for t in case.references.get("plastic_zone_times", ())}
     snapshots = []
@@ -84,6 +86,8 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> RunResult
             times.append(t)
             rows.append(probes.values(u_full, system, v_full, a_full))
             iterations.append(its)
+            if every and n % every == 0:
+                frames.append((t, output_mesh(model, u_full, system, v_full)))
             if n in zone_steps and case.material.plastic and model.dim == 2:
                 snapshots.append(zone_snapshot(t, model, system))
             if log:
@@ -98,7 +102,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None) -> RunResult
     return RunResult(
         t=np.array(times), history=history, n_dof=int(free.size), iterations=iterations,
         converged=converged, message=message, cpu_time_s=cpu, snapshots=snapshots,
-        mesh=output_mesh(model, u_full, system),
+        mesh=output_mesh(model, u_full, system, v_full), frames=frames,
         info=dict(_info(model, system, cpu_mesh), **(log.info() if log else {})),
     )
 
@@ -141,11 +145,16 @@ def _initial_velocity(model: Model) -> np.ndarray:
     return v[model.free]
 
 
-def output_mesh(model: Model, u_full: np.ndarray, system) -> meshio.Mesh:
-    """meshio mesh of the quadratic elements with the displacement (cartesian, 3 components)."""
+def output_mesh(model: Model, u_full: np.ndarray, system, v_full: np.ndarray) -> meshio.Mesh:
+    """meshio mesh of the quadratic elements with the displacement and velocity (cartesian, 3
+    components)."""
     mesh, case, rep = model.rmesh.mesh, model.case, model.rep
-    u = np.zeros((3, mesh.p.shape[1]))
-    u[: model.dim] = model.nodal_displacement(u_full)
+    to_frame = mesh_frame_to_cartesian(case, rep)
+    vectors = {}
+    for name, values in (("displacement", u_full), ("velocity", v_full)):
+        x = np.zeros((3, mesh.p.shape[1]))
+        x[: model.dim] = model.nodal_displacement(values)
+        vectors[name] = (to_frame @ x).T
     cells = mesh.dofs.element_dofs
     cell_type = "quad9" if model.dim == 2 else "hexahedron27"
     if model.dim == 3:
@@ -154,10 +163,7 @@ def output_mesh(model: Model, u_full: np.ndarray, system) -> meshio.Mesh:
     cell_data = {}
     if case.material.plastic:
         cell_data["peps"] = [system.peps.reshape(mesh.nelements, -1).mean(axis=1)]
-    return meshio.Mesh(
-        to_cartesian(case, rep, mesh.p).T, {cell_type: cells.T},
-        point_data={"displacement": (mesh_frame_to_cartesian(case, rep) @ u).T}, cell_data=cell_data,
-    )
+    return meshio.Mesh(to_cartesian(case, rep, mesh.p).T, {cell_type: cells.T}, point_data=vectors, cell_data=cell_data)
 
 
 def _info(model: Model, system, cpu_mesh: float) -> dict:

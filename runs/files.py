@@ -1,4 +1,4 @@
-"""A run's files (docs/contract.md): history.csv, summary.json, fields.vtu, plastic zones."""
+"""A run's files (docs/contract.md): history.csv, summary.json, fields.vtu, fields.pvd, plastic zones."""
 
 from __future__ import annotations
 
@@ -45,9 +45,21 @@ def jsonable(x):
     return x
 
 
+def write_series(out: Path, frames) -> None:
+    """``fields.pvd``, the ParaView collection of ``fields_NNNNN.vtu``, one per ``(t, mesh)``."""
+    entries = []
+    for k, (t, mesh) in enumerate(frames):
+        name = f"fields_{k:05d}.vtu"
+        mesh.write(out / name)
+        entries.append(f'    <DataSet timestep="{t:.12g}" part="0" file="{name}"/>')
+    (out / "fields.pvd").write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+                                    "  <Collection>\n" + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
+
+
 def write_run(out: Path, case, solver: str, result, wall_time_s: float) -> None:
     """Write history.csv (one row per time of ``result.t``, t = 0 included), summary.json, fields.vtu,
-    and for plastic runs plastic_zones.png with its data plastic_zones.npz."""
+    with a time series fields.pvd and its fields_NNNNN.vtu, and for plastic runs
+    plastic_zones.png with its data plastic_zones.npz."""
     out.mkdir(parents=True, exist_ok=True)
     n = len(result.t)  # a run that stopped early has its converged steps only; a modal run no steps
     table = pd.DataFrame({"t": result.t[:n], **{k: v[:n] for k, v in result.history.items()}})
@@ -55,6 +67,8 @@ def write_run(out: Path, case, solver: str, result, wall_time_s: float) -> None:
     (out / "summary.json").write_text(json.dumps(jsonable(summary(case, solver, result, wall_time_s)), indent=2))
     if result.mesh is not None:
         result.mesh.write(out / "fields.vtu")
+    if getattr(result, "frames", None):
+        write_series(out, result.frames)
     if getattr(result, "snapshots", None):
         from .figures import plastic_zones
         from .zones import save

@@ -29,9 +29,10 @@ def with_dim(solver: str, case):
 
 
 def solve(solver: str, case, progress: Callable[[int, int], None] | None = None,
-          fields: bool = False, options=None) -> RunResult:
+          fields: bool = False, options=None, every: int = 0) -> RunResult:
     """Run ``case`` with ``solver``; ``fields``: keep the synthesized 3-D field of the last
-    step in ``result.mesh`` (else None); ``options``: SMFEM's
+    step in ``result.mesh`` (else None); ``every``: also the field every that many steps in
+    ``result.frames`` (SMFEM and the reference FEM); ``options``: SMFEM's
     :class:`smfem.options.SolverOptions` (the reference has none)."""
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}: choose one of {', '.join(SOLVERS)}")
@@ -39,14 +40,14 @@ def solve(solver: str, case, progress: Callable[[int, int], None] | None = None,
     if solver == SMFEM:
         from smfem.solver import solve as smfem
 
-        return smfem(case, options, progress=progress, with_fields=fields)
+        return smfem(case, options, progress=progress, with_fields=fields, every=every)
     if solver == MODAL:
         from reference_fem.modal import solve as modal
 
         return modal(case, progress=progress)
     from reference_fem import solve as reference
 
-    result = reference(case, progress=progress)
+    result = reference(case, progress=progress, every=every)
     return result if fields else replace(result, mesh=None)
 
 

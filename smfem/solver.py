@@ -49,7 +49,8 @@ def stacked(model: Model):
     return K, model.mass_matrix(), Q, V0, offsets
 
 
-def solve(case, options: SolverOptions | None = None, progress=None, with_fields: bool = True) -> RunResult:
+def solve(case, options: SolverOptions | None = None, progress=None, with_fields: bool = True,
+          every: int = 0) -> RunResult:
     """Transient SMFEM run of a case.
 
     Parameters
@@ -58,11 +59,12 @@ def solve(case, options: SolverOptions | None = None, progress=None, with_fields
     options : how to solve (:class:`smfem.options.SolverOptions`; default: the measured choices)
     progress : optional callable ``(step, n_steps)``
     with_fields : also synthesize the 3-D field at the last computed step
+    every : also the field every ``every`` steps, t = 0 included (``result.frames``; 0: none)
     """
     cpu0 = time.process_time()
     options = options or SolverOptions()
     model, system, how = build_system(case, options)
-    return _run(case, model, system, how, progress, with_fields, cpu0)
+    return _run(case, model, system, how, progress, with_fields, cpu0, every)
 
 
 def build_system(case, options: SolverOptions):
@@ -102,7 +104,14 @@ def build_system(case, options: SolverOptions):
     return model, BlockIterative(model, case.dt, dataclasses.replace(options, iteration_matrix=kind)), how
 
 
-def _run(case, model, system, how, progress, with_fields, cpu0) -> RunResult:
+def _field(model, system, state):
+    """The synthesized 3-D field of a state: displacement, velocity, plastic strain."""
+    split = lambda x: np.split(x, model.offsets[1:-1])
+    plastic = (system.peps, system.peps_x3) if hasattr(system, "peps") else (None, None)
+    return field_mesh(model, split(state.u), peps=plastic[0], peps_x3=plastic[1], v_modes=split(state.v))
+
+
+def _run(case, model, system, how, progress, with_fields, cpu0, every=0) -> RunResult:
     """March ``system`` over the case's window, recording every probe after every step; a
     failed step ends the run with what came before it."""
     probes = CaseProbes(case, model, system)
@@ -110,12 +119,14 @@ def _run(case, model, system, how, progress, with_fields, cpu0) -> RunResult:
     values = np.full((n + 1, len(probes.names)), np.nan)
     snapshot_steps = {int(round(t / case.dt)) for t in case.references.get("plastic_zone_times", ())}
     plastic = case.material.plastic and hasattr(system, "peps")
-    iterations, snapshots, message, state = [], [], "", None
+    iterations, snapshots, frames, message, state = [], [], [], "", None
     V0 = np.concatenate([s.V0 for s in model.systems])
     try:
         for state in march(system, np.zeros_like(V0), V0, case.dt, n):
             values[state.n] = probes.values(state, system)
             system.observe(state)
+            if every and state.n % every == 0:
+                frames.append((state.n * case.dt, _field(model, system, state)))
             if state.n == 0:
                 continue
             iterations.append(state.iterations)
@@ -132,13 +143,9 @@ def _run(case, model, system, how, progress, with_fields, cpu0) -> RunResult:
             "iterations_mean": float(its.mean()), "iterations_max": int(its.max()), **facts}
     message = message or verdict
     done = len(iterations) + 1
-    mesh = None
-    if with_fields:
-        offsets = np.cumsum([0] + [s.K.shape[0] for s in model.systems])
-        plastic_points = (system.peps, system.peps_x3) if hasattr(system, "peps") else (None, None)
-        mesh = field_mesh(model, np.split(state.u, offsets[1:-1]), peps=plastic_points[0], peps_x3=plastic_points[1])
+    mesh = _field(model, system, state) if with_fields else None
     return RunResult(
         t=np.arange(done) * case.dt, history={name: values[:done, j] for j, name in enumerate(probes.names)},
         n_dof=model.n_dof, iterations=iterations, converged=not message, message=message,
-        cpu_time_s=time.process_time() - cpu0, mesh=mesh, info=info, snapshots=snapshots,
+        cpu_time_s=time.process_time() - cpu0, mesh=mesh, info=info, snapshots=snapshots, frames=frames,
     )

@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 import meshio
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -82,3 +83,28 @@ def test_console_script_and_module_entry_point(tmp_path):
                            "--out", str(tmp_path), "--quiet"], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert len(pd.read_csv(tmp_path / "history.csv")) == get_case("dome", {"t_end": 1e-4}).n_steps + 1
+
+
+@pytest.mark.parametrize("solver", ["smfem", "reference"])
+def test_every_n_steps_writes_a_paraview_time_series(solver, tmp_path):
+    """``--every 5`` on 10 steps: fields.pvd lists t = 0, 5 dt and 10 dt; each VTU reads back
+    with displacement and velocity, and the last one is the final field of fields.vtu."""
+    import xml.etree.ElementTree as ET
+
+    out = tmp_path / solver
+    assert main(["run", "notched_strip", "--solver", solver, "--set", "harmonics=20", "--set", "t_end=3.2e-5",
+                 "--every", "5", "--out", str(out), "--quiet"]) == 0
+    sets = ET.parse(out / "fields.pvd").getroot().find("Collection").findall("DataSet")
+    times = [float(d.get("timestep")) for d in sets]
+    assert times == pytest.approx([0.0, 1.6e-5, 3.2e-5])
+    frames = [meshio.read(out / d.get("file")) for d in sets]
+    assert all({"displacement", "velocity"} <= set(f.point_data) for f in frames)
+    assert not frames[0].point_data["displacement"].any() and frames[2].point_data["displacement"].any()
+    final = meshio.read(out / "fields.vtu")
+    assert np.array_equal(frames[2].point_data["displacement"], final.point_data["displacement"])
+    assert np.array_equal(frames[2].point_data["velocity"], final.point_data["velocity"])
+
+
+def test_every_out_of_range_is_a_usage_error(tmp_path, capsys):
+    assert main(["run", "dome", "--every", "201", "--out", str(tmp_path / "x")]) == 2
+    assert "--every 201" in capsys.readouterr().err and not (tmp_path / "x").exists()
