@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from . import assembly, fourier
+from . import fourier
 from .sampling import ROWS, element_scatter, gauss_operators
 
 

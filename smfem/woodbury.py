@@ -62,7 +62,7 @@ class CutoutWoodbury:
         S = model.systems
         x3, w, excess = cutout_points(model)
         dofs = cutout_dofs(model)
-        n_dof, n_q = len(dofs), len(x3)
+        n_dof = len(dofs)
         comp_type = (dofs % 3 == 2).astype(int)  # in-plane components go as psi1, the x3 one as psi3
         # basis values and x3 derivatives per mode, point and dof: d/dx psi(p x) = p psi(p x + pi / 2)
         p = np.array([fourier.wavenumber(s.mode, model.body, model.length) for s in S])
