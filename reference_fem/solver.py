@@ -18,7 +18,7 @@ from .frames import AXISYMMETRIC, mesh_frame_to_cartesian, to_cartesian
 from .mesh import build_mesh, mirror_permutation
 from .model import INTORDER, Model
 from .newmark import march, newmark_constants
-from .probes import Probes
+from .probes import Probes, mandel_to_tensor
 from .zones import snapshot as zone_snapshot
 from .wall import ContactLog, WallSystem, case_wall_rows
 
@@ -45,7 +45,8 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
         ``iterations``: Newton iterations per step (1 for a linear step; with a wall, the
         active-set iterations); ``cpu_time_s``: assembly, factorization and time stepping, mesh
         generation excluded; ``mesh``: the final state (cartesian points; point data
-        'displacement', 'velocity'; cell data 'peps', the element mean, when plastic); ``info``: 'dim',
+        'displacement', 'velocity'; cell data 'stress', the element mean as a cartesian tensor,
+        and 'peps', the element mean, when plastic); ``info``: 'dim',
         'representation', 'element', 'n_elements', 'intorder', 'counts' (elements per mesh
         direction), 'factorizations' (of K + a0 M and of tangents), 'cpu_mesh_s'; with a wall
         also 'contact_nodes', 'energy_before' and 'energy_after' (kinetic + strain, J, at t = 0
@@ -147,7 +148,7 @@ def _initial_velocity(model: Model) -> np.ndarray:
 
 def output_mesh(model: Model, u_full: np.ndarray, system, v_full: np.ndarray) -> meshio.Mesh:
     """meshio mesh of the quadratic elements with the displacement and velocity (cartesian, 3
-    components)."""
+    components) and the element mean of the stress (a cartesian tensor)."""
     mesh, case, rep = model.rmesh.mesh, model.case, model.rep
     to_frame = mesh_frame_to_cartesian(case, rep)
     vectors = {}
@@ -160,7 +161,9 @@ def output_mesh(model: Model, u_full: np.ndarray, system, v_full: np.ndarray) ->
     if model.dim == 3:
         # scikit-fem's reference hexahedron is left-handed in VTK's node order: mirror it
         cells = cells[mirror_permutation(ElementHex2.doflocs)][HEX_MAPPING]
-    cell_data = {}
+    # the element mean of the stress at its quadrature points, cartesian (9 components: a tensor to ParaView)
+    sigma = mandel_to_tensor(system.sigma).reshape(mesh.nelements, -1, 3, 3).mean(axis=1)
+    cell_data = {"stress": [(to_frame @ sigma @ to_frame.T).reshape(-1, 9)]}
     if case.material.plastic:
         cell_data["peps"] = [system.peps.reshape(mesh.nelements, -1).mean(axis=1)]
     return meshio.Mesh(to_cartesian(case, rep, mesh.p).T, {cell_type: cells.T}, point_data=vectors, cell_data=cell_data)

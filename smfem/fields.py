@@ -9,13 +9,18 @@ import numpy as np
 
 from cases.geometry import RING
 
-from . import fourier
+from . import fourier, inhomogeneity
+from .assembly import element_dofs
 
 
 def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: np.ndarray | None = None,
-               peps_x3: np.ndarray | None = None, v_modes: list[np.ndarray] | None = None) -> meshio.Mesh:
+               peps_x3: np.ndarray | None = None, v_modes: list[np.ndarray] | None = None,
+               relaxed: np.ndarray | None = None) -> meshio.Mesh:
     """Hexahedral 3-D mesh with the synthesized displacement (and, given ``v_modes``, velocity)
-    as cartesian point data.
+    as cartesian point data, and each cell's stress (cartesian tensor, 9 components) as cell
+    data: the elastic stress of the amplitudes at the element's centre and the cell's middle
+    along x3, less ``relaxed`` (the plastic strains' share, (6, n_elements, n_x3_points) at
+    ``peps_x3``, from the nearest point).
 
     Ring: ``n_x3`` sectors around the axis (default 72); prism: ``n_x3`` slices along the span
     (default 60). Cartesian axes as in :mod:`cases.geometry`. With ``peps`` (the plastic strain
@@ -42,9 +47,12 @@ def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: 
     n = mesh.n_nodes
     e = mesh.elements
     hexes = np.concatenate([e[None] + (here * n)[:, None, None], e[None] + (nxt * n)[:, None, None]], axis=2)
-    cell_data = {}
+    middle = x3[here] + 0.5 * ((x3[nxt] - x3[here]) % (2 * math.pi if ring else np.inf))
+    local = _elastic_stress(model, u_modes, middle)  # (n_cells along x3, ne, 6)
+    if relaxed is not None:
+        local = local - relaxed[:, :, np.abs(peps_x3[None, :] - middle[:, None]).argmin(axis=1)].transpose(2, 1, 0)
+    cell_data = {"stress": [_to_cartesian(model, local, middle).reshape(-1, 9)]}
     if peps is not None:
-        middle = x3[here] + 0.5 * ((x3[nxt] - x3[here]) % (2 * math.pi if ring else np.inf))
         nearest = np.abs(peps_x3[None, :] - middle[:, None]).argmin(axis=1)
         cell_data["peps"] = [peps.mean(axis=1)[:, nearest].T.ravel()]
     return meshio.Mesh(points.reshape(-1, 3), [("hexahedron", hexes.reshape(-1, 8))],
@@ -64,3 +72,41 @@ def _cartesian(model, amplitudes: list[np.ndarray], x3: np.ndarray) -> np.ndarra
         c, s = np.cos(x3)[:, None], np.sin(x3)[:, None]
         return np.stack([u[..., 0] * c - u[..., 2] * s, u[..., 0] * s + u[..., 2] * c, u[..., 1]], axis=-1)
     return np.stack([u[..., 2], u[..., 0], u[..., 1]], axis=-1)
+
+
+def _elastic_stress(model, amplitudes: list[np.ndarray], x3: np.ndarray) -> np.ndarray:
+    """``f D B0 u`` of the amplitudes at the element centres and ``x3``, element frame rows:
+    (n_x3, n_elements, 6)."""
+    mesh, body = model.mesh, model.body
+    dofs = element_dofs(mesh.elements)
+    out = np.zeros((len(x3), mesh.n_elements, 6))
+    for s, amp in zip(model.systems, amplitudes):
+        B0 = model.ops.at(fourier.wavenumber(s.mode, body, model.length))[0]  # (ne, 6, 12)
+        a = np.einsum("rs,esk,ek->er", model.D, B0, (s.T @ amp)[dofs], optimize=True)
+        psi1, psi3 = fourier.psi(s.mode, x3, body, model.length)
+        out += np.where(fourier.ROW_TYPE == 0, psi1[:, None], psi3[:, None])[:, None, :] * a[None]
+    if model.case.cutouts:
+        out *= inhomogeneity.element_factor(model.case, mesh, x3).T[:, :, None]
+    return out
+
+
+def _to_cartesian(model, local: np.ndarray, x3: np.ndarray) -> np.ndarray:
+    """Voigt stresses (tensor shears) in each element's frame (t1, t2 in the section, x3),
+    (n_x3, ne, 6), as cartesian tensors (n_x3, ne, 3, 3)."""
+    S = np.zeros(local.shape[:2] + (3, 3))
+    for k, (i, j) in enumerate(((0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2))):
+        S[..., i, j] = S[..., j, i] = local[..., k]
+    R = model.ops.rotation  # (ne, 2, 2): rows t1, t2 in the section's axes
+    if model.body == RING:  # section axes r, z and the hoop direction at angle x3
+        c, s = np.cos(x3)[:, None], np.sin(x3)[:, None]
+        e_r = np.stack([c, s, 0 * c], axis=-1)  # (n_x3, 1, 3)
+        e_z = np.broadcast_to(np.array([0.0, 0.0, 1.0]), e_r.shape)
+        e_3 = np.stack([-s, c, 0 * c], axis=-1)
+    else:  # x1, x2 of the section and the span x3 -> cartesian (x3, x1, x2), as the points
+        e_r = np.broadcast_to(np.array([0.0, 1.0, 0.0]), (len(x3), 1, 3))
+        e_z = np.broadcast_to(np.array([0.0, 0.0, 1.0]), e_r.shape)
+        e_3 = np.broadcast_to(np.array([1.0, 0.0, 0.0]), e_r.shape)
+    t1 = R[None, :, 0, 0, None] * e_r + R[None, :, 0, 1, None] * e_z
+    t2 = R[None, :, 1, 0, None] * e_r + R[None, :, 1, 1, None] * e_z
+    Q = np.stack([t1, t2, np.broadcast_to(e_3, t1.shape)], axis=-2)  # rows: the local axes, cartesian
+    return np.einsum("kepi,kepq,keqj->keij", Q, S, Q, optimize=True)

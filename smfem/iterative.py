@@ -158,6 +158,12 @@ class BlockIterative:
         return self.points.unfolded(intensity(self.state.eps_p.T).reshape(self.points.point_shape[1:]))[1]
 
     @property
+    def relaxed(self) -> np.ndarray:
+        """The stress the plastic strains took off, element means, rows first, over the whole
+        x3 range (:attr:`peps_x3`): (6, ne, n)."""
+        return self.points.unfolded(self.state.relaxed.reshape(self.points.point_shape).mean(axis=2), rows=True)[1]
+
+    @property
     def peps_x3(self) -> np.ndarray:
         """The x3 of the points of :attr:`peps` (the sample points and their images)."""
         return self.points.unfolded(self.points.x3)[0]

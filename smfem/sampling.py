@@ -77,24 +77,26 @@ class Symmetry:
         if self.copies > 1 and not self._shared_by(case, model.mesh):
             self.width, self.copies, self.mirror = self.period, 1, False
 
-    def images(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Every image of the points ``x`` over the period, sorted, and the point each is of."""
+    def images(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every image of the points ``x`` over the period, sorted, the point each is of, and
+        whether it is a mirror image (where the psi3 stress rows change sign)."""
         if self.width == 0.0:
-            return x, np.arange(len(x))
+            return x, np.arange(len(x)), np.zeros(len(x), bool)
         k = np.arange(self.copies // (2 if self.mirror else 1))
         turned = [(x[None, :] + 2 * self.width * k[:, None]) if self.mirror else x[None, :] + self.width * k[:, None]]
         if self.mirror:
             turned.append(2 * self.width * (k[:, None] + 1) - x[None, :])
         full = np.concatenate([t.ravel() for t in turned]) % self.period
         index = np.tile(np.arange(len(x)), len(turned) * len(k))
+        mirrored = np.repeat(np.arange(len(turned)) == 1, len(k) * len(x))
         order = np.argsort(full, kind="stable")
-        return full[order], index[order]
+        return full[order], index[order], mirrored[order]
 
     def _shared_by(self, case, mesh) -> bool:
         """Whether the cut-outs repeat on every image of the domain (the modes' symmetry is the
         problem's, so they should)."""
         x = (np.arange(4096) + 0.5 * math.sqrt(2) - 0.5) * self.width / 4096
-        full, index = self.images(x)
+        full, index, _ = self.images(x)
         return np.array_equal(inhomogeneity.element_factor(case, mesh, full),
                               inhomogeneity.element_factor(case, mesh, x)[:, index])
 
@@ -141,10 +143,15 @@ class SamplePoints:
         self.Gt = self.G.T.tocsr()
         self.point_shape = (6, ne, 4, len(self.x3))
 
-    def unfolded(self, peps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The points over the whole period and a point array (..., n_x3) on them."""
-        full, index = self.symmetry.images(self.x3)
-        return full, peps[..., index]
+    def unfolded(self, values: np.ndarray, rows: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """The points over the whole period and a point array (..., n_x3) on them; ``rows``:
+        the array is stress rows first, (6, ..., n_x3), whose psi3 rows change sign on mirror
+        images."""
+        full, index, mirrored = self.symmetry.images(self.x3)
+        out = values[..., index]
+        if rows:
+            out[ROWS[1]] *= np.where(mirrored, -1.0, 1.0)
+        return full, out
 
     def amplitudes(self, u: np.ndarray) -> np.ndarray:
         """``D B u`` of stacked amplitudes at the Gauss points, rows first: (6, ne * 4, n_modes)."""

@@ -105,10 +105,12 @@ def build_system(case, options: SolverOptions):
 
 
 def _field(model, system, state):
-    """The synthesized 3-D field of a state: displacement, velocity, plastic strain."""
+    """The synthesized 3-D field of a state: displacement, velocity, stress, plastic strain."""
     split = lambda x: np.split(x, model.offsets[1:-1])
-    plastic = (system.peps, system.peps_x3) if hasattr(system, "peps") else (None, None)
-    return field_mesh(model, split(state.u), peps=plastic[0], peps_x3=plastic[1], v_modes=split(state.v))
+    if not hasattr(system, "peps"):
+        return field_mesh(model, split(state.u), v_modes=split(state.v))
+    return field_mesh(model, split(state.u), peps=system.peps, peps_x3=system.peps_x3, v_modes=split(state.v),
+                      relaxed=system.relaxed)
 
 
 def _run(case, model, system, how, progress, with_fields, cpu0, every=0) -> RunResult:

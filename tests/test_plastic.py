@@ -164,9 +164,9 @@ def test_elastic_forces_at_the_sample_points_are_K_u_over_the_fundamental_domain
     u = np.random.default_rng(3).normal(size=model.n_dof)
     Ku = StackedOperator(model).K(u)
     assert np.abs(points.forces(points.stress(u)) - Ku).max() <= 1e-10 * np.abs(Ku).max()
-    full, index = points.symmetry.images(points.x3)
+    full, index, mirrored = points.symmetry.images(points.x3)
     period = 2 * math.pi if model.body == "ring" else model.length
-    assert len(full) == copies * len(points.x3)
+    assert len(full) == copies * len(points.x3) and mirrored.sum() == (len(full) // 2 if points.symmetry.mirror else 0)
     assert width == 0 or (np.all(np.diff(full) > 0) and 0 < full[0] and full[-1] < period)
 
 
