@@ -30,7 +30,8 @@ class Report:
 
 
 def case_figures(an: CaseAnalysis, out: Path) -> dict[str, str]:
-    """Draw (or copy) the case's figures and fields file; paths relative to ``out``."""
+    """Draw (or copy) the case's figures and fields files (the final field and its time series);
+    paths relative to ``out``."""
     name, made = an.case.name, {}
     (out / "figures").mkdir(parents=True, exist_ok=True)
     if not an.available:
@@ -52,6 +53,12 @@ def case_figures(an: CaseAnalysis, out: Path) -> dict[str, str]:
             shutil.copyfile(run.path / "fields.vtu", out / made["vtu"])
             made["field"] = f"figures/{name}-field.png"
             render_field(out / made["vtu"], out / made["field"], f"{name} (SMFEM)")
+        if (run.path / "fields.pvd").exists():  # the time series: the collection and its frames
+            series = out / "fields" / f"{name}-smfem-series"
+            series.mkdir(parents=True, exist_ok=True)
+            for frame in [run.path / "fields.pvd", *sorted(run.path.glob("fields_*.vtu"))]:
+                shutil.copyfile(frame, series / frame.name)
+            made["pvd"] = f"fields/{name}-smfem-series/fields.pvd"
     return made
 
 

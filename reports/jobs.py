@@ -27,7 +27,8 @@ class Job:
     ``reference-modal``).
 
     ``overrides`` is a sorted tuple of ``(key, value)`` so that a job can be hashed; ``fields``
-    asks an SMFEM run for ``fields.vtu`` (and plastic zones, which plastic runs always draw).
+    asks an SMFEM run for ``fields.vtu`` and its time series ``fields.pvd`` (and plastic zones,
+    which plastic runs always draw).
     """
 
     case: str
@@ -59,6 +60,16 @@ class Outcome:
     files: dict | None = None
 
 
+#: frames of the time series a fields run writes (fields.pvd): the field at t = 0 and about as
+#: many more, evenly over the window
+SERIES_FRAMES = 10
+
+
+def series_every(case) -> int:
+    """Steps between the frames of a fields run's time series."""
+    return max(1, case.n_steps // SERIES_FRAMES)
+
+
 def execute(job: Job) -> Outcome:
     """Run ``job`` as ``smfem run`` would and return its files.
 
@@ -69,7 +80,7 @@ def execute(job: Job) -> Outcome:
     case = job.build()
     wall0 = time.perf_counter()
     try:
-        result = solve(job.solver, case, fields=job.fields)
+        result = solve(job.solver, case, fields=job.fields, every=series_every(case) if job.fields else 0)
     except UnsupportedCase as exc:
         return Outcome(NOT_AVAILABLE, str(exc))
     except Exception as exc:  # noqa: BLE001 - reported per run, see the docstring

@@ -180,6 +180,8 @@ def _case(ctx: ReportContext, an: CaseAnalysis) -> Section:
         blocks.append(figure(ctx.out / figs["field"], f"{name}: synthesized 3-D field of SMFEM at the final time"))
     if "vtu" in figs:
         blocks.append(link(figs["vtu"], f"{figs['vtu']} (open in ParaView)"))
+    if "pvd" in figs:
+        blocks.append(link(figs["pvd"], f"{figs['pvd']} (the time series: open in ParaView and play)"))
     return Section(name, f"Case {name}", blocks, css="case")
 
 

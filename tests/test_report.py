@@ -51,6 +51,9 @@ def test_tiny_report_has_a_figure_per_case_the_headline_and_the_tables(tiny):
         assert (out / "figures" / f"{study.case}-work-precision.png").stat().st_size > 10_000
         assert (out / "figures" / f"{study.case}-histories.png").exists()
         assert (out / "fields" / f"{study.case}-smfem.vtu").exists()
+        series = out / "fields" / f"{study.case}-smfem-series"
+        assert (series / "fields.pvd").exists() and len(list(series.glob("fields_*.vtu"))) >= 2
+        assert f"fields/{study.case}-smfem-series/fields.pvd" in (out / "index.html").read_text()
         assert (out / "figures" / f"{study.case}-spatial.png").exists()
     for name in ("headline", "truth", "spatial", "runs", "errors", "orders", "published"):
         assert (out / "tables" / f"{name}.csv").exists()
