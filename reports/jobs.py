@@ -62,7 +62,7 @@ class Outcome:
 
 #: frames of the time series a fields run writes (fields.pvd): the field at t = 0 and about as
 #: many more, evenly over the window
-SERIES_FRAMES = 10
+SERIES_FRAMES = 5
 
 
 def series_every(case) -> int:

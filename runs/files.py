@@ -6,6 +6,7 @@ import json
 import math
 from pathlib import Path
 
+import meshio
 import numpy as np
 import pandas as pd
 
@@ -46,11 +47,15 @@ def jsonable(x):
 
 
 def write_series(out: Path, frames) -> None:
-    """``fields.pvd``, the ParaView collection of ``fields_NNNNN.vtu``, one per ``(t, mesh)``."""
+    """``fields.pvd``, the ParaView collection of ``fields_NNNNN.vtu``, one per ``(t, mesh)``;
+    the frames' fields in single precision (half the files; plenty to look at)."""
     entries = []
     for k, (t, mesh) in enumerate(frames):
         name = f"fields_{k:05d}.vtu"
-        mesh.write(out / name)
+        single = meshio.Mesh(mesh.points, mesh.cells,
+                             point_data={key: np.asarray(v, np.float32) for key, v in mesh.point_data.items()},
+                             cell_data={key: [np.asarray(v, np.float32) for v in vs] for key, vs in mesh.cell_data.items()})
+        single.write(out / name)
         entries.append(f'    <DataSet timestep="{t:.12g}" part="0" file="{name}"/>')
     (out / "fields.pvd").write_text('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
                                     "  <Collection>\n" + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
