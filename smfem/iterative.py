@@ -8,11 +8,11 @@ the harmonic coupling of the cut-outs included (:class:`smfem.coupling.StackedOp
 the plastic strains live at the sample points (:mod:`smfem.sampling`), where the trial
 stresses of the step's displacement increment are returned to the yield surface by Wilkins'
 correction (16). ``A``, the iteration matrix, is the whole coupled ``K + a0 M`` factorized
-once (exact for an elastic step: one iteration and a check), the same system solved by
-conjugate gradients with the coupling applied matrix-free and the diagonal blocks as
-preconditioner (to a relative residual of 1e-3: the outer iterations do the rest), or the
-paper's block SOR over the harmonics, where
-within a sweep the stresses follow each block's update elastically (15). Anderson
+once (:func:`factorize_coupled`; exact for an elastic step: one iteration and a check), the
+same system solved by conjugate gradients with the coupling applied matrix-free and the
+diagonal blocks as preconditioner (to a relative residual of 1e-3: the outer iterations do
+the rest), or the paper's block SOR over the harmonics, where within a sweep the stresses
+follow each block's update elastically (15). Anderson
 acceleration (Walker & Ni 2011) combines the last iterates. A step has converged when the
 correction of an iteration, ``A^-1`` times the residual, is below ``tol`` relative to the
 amplitudes; the material state is committed only then.
