@@ -20,6 +20,14 @@ from . import fourier
 from .sampling import ROWS, element_scatter, gauss_operators
 
 
+def cutout_points(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The Gauss-Legendre points of the cut-outs' x3 intervals: ``x3``, weights and ``f - 1``
+    per cut-out element (ne, nq)."""
+    live = model.cutout_elements
+    inside = (model.factor[live] != 1.0).any(axis=0)
+    return model.x3[inside], model.x3_weights[inside], model.factor[np.ix_(live, inside)] - 1.0
+
+
 class StackedOperator:
     """``K x`` and ``M x`` of a model's modes stacked (``model.offsets``)."""
 
@@ -29,13 +37,10 @@ class StackedOperator:
         if not model.coupling:
             self.K_h, self.M_h, self.cut = sp.block_diag([s.K for s in S], format="csr"), np.concatenate([s.M for s in S]), None
             return
-        homogeneous = [model.reduced_blocks(i, homogeneous=True) for i in range(len(S))]
-        self.K_h = sp.block_diag([k for k, _ in homogeneous], format="csr")
-        self.M_h = np.concatenate([m for _, m in homogeneous])
+        self.K_h = sp.block_diag([k for k, _ in model.homogeneous_blocks], format="csr")
+        self.M_h = np.concatenate([m for _, m in model.homogeneous_blocks])
         live = model.cutout_elements
-        inside = (model.factor[live] != 1.0).any(axis=0)  # the Gauss-Legendre points in a cut-out
-        x3, w = model.x3[inside], model.x3_weights[inside]
-        excess = model.factor[np.ix_(live, inside)] - 1.0  # (ne, nq): f - 1
+        x3, w, excess = cutout_points(model)
         psi = np.array([fourier.psi(s.mode, x3, model.body, model.length) for s in S])  # (n_modes, 2, nq)
         self.psi, self.psi_t = psi.transpose(1, 0, 2).copy(), psi.transpose(1, 2, 0).copy()  # per row type
         # stiffness: D B and B' at the Gauss points of the cut-out elements, weights per point

@@ -79,6 +79,12 @@ class ElementOperators:
         B2[:, 1] = -c * (B2[:, 0] + B2[:, 2])
         return B0, B1, B2
 
+    def linear_parts(self) -> tuple[tuple, tuple]:
+        """``(A, B)`` with ``at(p) = A + p B`` part by part: :meth:`at` is linear in ``p``, the
+        dropped and free rows included."""
+        A = self.at(0.0)
+        return A, tuple(one - zero for one, zero in zip(self.at(1.0), A))
+
 
 def local_frame(X: np.ndarray) -> np.ndarray:
     """(n, 2, 2) rotations with rows t1 (along xi at the centre) and t2 (t1 turned by +90 deg)."""

@@ -11,6 +11,7 @@ coupling, and ``coupling`` holds the off-diagonal blocks.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -211,8 +212,7 @@ class Model:
         live = self.cutout_elements
         ops = self.ops.subset(live)
         p = np.array([fourier.wavenumber(m, self.body, self.length) for m in self.modes])
-        Ba = ops.at(0.0)  # at(p) is linear in p, the dropped and free rows included
-        Bb = tuple(one - zero for one, zero in zip(ops.at(1.0), Ba))
+        Ba, Bb = ops.linear_parts()
         C, terms = [], []
         for a in (0, 1):
             for b in (0, 1):
@@ -251,13 +251,12 @@ class Model:
         """Reduced coordinates of a full vector that lies in the range of ``T``."""
         return sp.linalg.lsqr(T, v, atol=1e-14, btol=1e-14)[0] if v.any() else np.zeros(T.shape[1])
 
-    def integrals(self, i: int, j: int, elements: np.ndarray | slice = slice(None), homogeneous: bool = False) -> np.ndarray:
+    def integrals(self, i: int, j: int, homogeneous: bool = False) -> np.ndarray:
         """(n_elements, 2, 2) x3 integrals ``int f psi_a^(i) psi_b^(j)`` of active modes ``i, j``
-        per element (of ``elements`` only, if given); ``homogeneous``: with f = 1 everywhere."""
+        per element; ``homogeneous``: with f = 1 everywhere."""
         if self._I is not None and not homogeneous:
-            return self._I[i, j][self._profile[elements]]
-        n = len(np.arange(self.mesh.n_elements)[elements])
-        out = np.zeros((n, 2, 2))
+            return self._I[i, j][self._profile]
+        out = np.zeros((self.mesh.n_elements, 2, 2))
         if i == j:  # homogeneous along x3: exact, and zero between different modes
             out[:, 0, 0], out[:, 1, 1] = fourier.psi_squared_integrals(self.modes[i], self.body, self.length)
         return out
@@ -273,6 +272,12 @@ class Model:
         I = self.integrals(i, j, homogeneous=homogeneous)
         rho_int = self.rho * np.stack([I[:, 0, 0], I[:, 1, 1]], axis=1)
         return assembly.lumped_mass(self.ops.sqrt_g, rho_int, self.mesh.elements, self.mesh.n_nodes)
+
+    @cached_property
+    def homogeneous_blocks(self) -> list[tuple[sp.csr_matrix, np.ndarray]]:
+        """Each mode's reduced stiffness and lumped mass of the body without its cut-outs
+        (f = 1), built once: the matrix-free operator and the Woodbury form both start there."""
+        return [self.reduced_blocks(i, homogeneous=True) for i in range(len(self.systems))]
 
     def reduced_blocks(self, i: int, homogeneous: bool = False) -> tuple[sp.csr_matrix, np.ndarray]:
         """Mode ``i``'s reduced stiffness and lumped mass diagonal; ``homogeneous``: of the body

@@ -32,14 +32,17 @@ GAUSS_ETA = GAUSS_A * np.array([-1.0, -1.0, 1.0, 1.0])
 ROWS = (np.flatnonzero(fourier.ROW_TYPE == 0), np.flatnonzero(fourier.ROW_TYPE == 1))
 
 
+def at_gauss_points(parts) -> np.ndarray:
+    """The moment-scheme strain operator ``B0 + xi B1 + eta B2`` (each (ne, 6, 12)) at the four
+    Gauss points: (ne, 4, 6, 12)."""
+    B0, B1, B2 = parts
+    return B0[:, None] + GAUSS_XI[None, :, None, None] * B1[:, None] + GAUSS_ETA[None, :, None, None] * B2[:, None]
+
+
 def gauss_operators(model, elements: np.ndarray | slice = slice(None)) -> np.ndarray:
     """``B`` of every mode at the four Gauss points of ``elements``: (n_modes, ne, 4, 6, 12)."""
     ops = model.ops.subset(np.arange(model.mesh.n_elements)[elements])
-    out = []
-    for s in model.systems:
-        B0, B1, B2 = ops.at(fourier.wavenumber(s.mode, model.body, model.length))
-        out.append(B0[:, None] + GAUSS_XI[None, :, None, None] * B1[:, None] + GAUSS_ETA[None, :, None, None] * B2[:, None])
-    return np.stack(out)
+    return np.stack([at_gauss_points(ops.at(fourier.wavenumber(s.mode, model.body, model.length))) for s in model.systems])
 
 
 def element_scatter(model, elements: np.ndarray | slice = slice(None)) -> sp.csr_matrix:

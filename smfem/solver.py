@@ -81,7 +81,8 @@ def build_system(case, options: SolverOptions):
     kind = options.iteration_matrix
     low_rank = coupled and woodbury.preferred(model)
     if kind == "auto":
-        fits = not coupled or low_rank or model.coupled_nonzeros() <= options.direct_max_nonzeros
+        # the Woodbury form serves the iterations; an elastic run factorizes the assembled matrix
+        fits = not coupled or (plastic and low_rank) or model.coupled_nonzeros() <= options.direct_max_nonzeros
         kind = "coupled" if fits else "matrix-free"
     if not plastic and (kind == "coupled" or not coupled):
         K, M, Q, _, _ = stacked(model)

@@ -25,14 +25,8 @@ import scipy.sparse as sp
 
 from . import fourier
 from .linalg import factorize_spd
-from .sampling import GAUSS_ETA, GAUSS_XI
-
-
-def cutout_points(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The cut-out elements' x3 points: ``x3``, weights and ``f - 1`` per element (ne, nq)."""
-    live = model.cutout_elements
-    inside = (model.factor[live] != 1.0).any(axis=0)
-    return model.x3[inside], model.x3_weights[inside], model.factor[np.ix_(live, inside)] - 1.0
+from .coupling import cutout_points
+from .sampling import at_gauss_points
 
 
 def cutout_dofs(model) -> np.ndarray:
@@ -83,7 +77,7 @@ class CutoutWoodbury:
         self.F = Y * np.sqrt(np.where(np.take_along_axis(keep, order, 1), lam, 0.0))[:, None, :]  # (nq, 2 dofs, rank)
         self.offsets, self.n_dof = model.offsets, n_dof
         # A_h: the body without cut-outs, block-diagonal
-        blocks = [model.reduced_blocks(i, homogeneous=True) for i in range(len(S))]
+        blocks = model.homogeneous_blocks
         self.base = factorize_spd(sp.block_diag([k + sp.diags(a0 * m) for k, m in blocks], format="csr"))
         # S = I - V A_h^-1 V' = I - sum_l W_l G_l W_l', G_l the cut-out dofs' block of A_l^-1
         lus = [factorize_spd(k + sp.diags(a0 * m)) for k, m in blocks]
@@ -106,10 +100,7 @@ class CutoutWoodbury:
         moment-scheme stiffness, ``Ba U + Bb' U'`` at the four Gauss points, and lumped mass."""
         live = model.cutout_elements
         ops = model.ops.subset(live)
-        Ba = ops.at(0.0)
-        Bb = tuple(one - zero for one, zero in zip(ops.at(1.0), Ba))
-        gauss = lambda B: B[0][:, None] + GAUSS_XI[None, :, None, None] * B[1][:, None] + GAUSS_ETA[None, :, None, None] * B[2][:, None]
-        Ba, Bb = gauss(Ba), gauss(Bb)  # (ne, 4, 6, 12)
+        Ba, Bb = (at_gauss_points(parts) for parts in ops.linear_parts())  # (ne, 4, 6, 12)
         # Bb acts on the x3 derivative: a row varies as psi_row(p x), its derivative term as
         # p psi_comp(p x + pi / 2), which is +-psi_row: the sign per row and component type
         sign = _derivative_signs(model)
