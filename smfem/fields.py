@@ -49,11 +49,11 @@ def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: 
     hexes = np.concatenate([e[None] + (here * n)[:, None, None], e[None] + (nxt * n)[:, None, None]], axis=2)
     middle = x3[here] + 0.5 * ((x3[nxt] - x3[here]) % (2 * math.pi if ring else np.inf))
     local = _elastic_stress(model, u_modes, middle)  # (n_cells along x3, ne, 6)
+    nearest = None if peps_x3 is None else np.abs(peps_x3[None, :] - middle[:, None]).argmin(axis=1)
     if relaxed is not None:
-        local = local - relaxed[:, :, np.abs(peps_x3[None, :] - middle[:, None]).argmin(axis=1)].transpose(2, 1, 0)
+        local = local - relaxed[:, :, nearest].transpose(2, 1, 0)
     cell_data = {"stress": [_to_cartesian(model, local, middle).reshape(-1, 9)]}
     if peps is not None:
-        nearest = np.abs(peps_x3[None, :] - middle[:, None]).argmin(axis=1)
         cell_data["peps"] = [peps.mean(axis=1)[:, nearest].T.ravel()]
     return meshio.Mesh(points.reshape(-1, 3), [("hexahedron", hexes.reshape(-1, 8))],
                        point_data=point_data, cell_data=cell_data)

@@ -131,6 +131,7 @@ class SamplePoints:
     def __init__(self, model, oversampling: float, at_least: int = 0):
         self.model = model
         self.x3, self.w, self.symmetry = sample_points(model, oversampling, at_least)
+        self.images = self.symmetry.images(self.x3)  # fixed: probes unfold the points every step
         self.factor = inhomogeneity.element_factor(model.case, model.mesh, self.x3)  # (ne, n_x3)
         self.scale = self.factor[None, :, None, :]
         psi = np.array([fourier.psi(s.mode, self.x3, model.body, model.length) for s in model.systems])
@@ -150,7 +151,7 @@ class SamplePoints:
         """The points over the whole period and a point array (..., n_x3) on them; ``rows``:
         the array is stress rows first, (6, ..., n_x3), whose psi3 rows change sign on mirror
         images."""
-        full, index, mirrored = self.symmetry.images(self.x3)
+        full, index, mirrored = self.images
         out = values[..., index]
         if rows:
             out[ROWS[1]] *= np.where(mirrored, -1.0, 1.0)
