@@ -1,10 +1,14 @@
-"""The five verification scenes as data (docs/scenes.md). No solver imports here.
+"""The five verification scenes as data (docs/scenes.md), and scenes from TOML files
+(:mod:`cases.scene_file`). No solver imports here.
 
 >>> from cases import get_case
 >>> case = get_case("thick_cylinder", {"dt": 1e-5})
+>>> mine = get_case("examples/dome.toml", {"dt": 1e-5})
 """
 
-from . import dome, notched_cylinder, notched_strip, rod_impact, thick_cylinder
+from pathlib import Path
+
+from . import dome, notched_cylinder, notched_strip, rod_impact, scene_file, thick_cylinder
 from .case import Case
 from .params import ParameterError, UnsupportedCase, parse_sets, validate
 
@@ -12,12 +16,25 @@ _MODULES = (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact)
 CASES = {m.NAME: m for m in _MODULES}
 
 
-def get_case(name: str, overrides: dict | None = None) -> Case:
-    """Build case ``name`` with validated ``overrides`` (keys and values: docs/scenes.md)."""
+def get_case(name: str | Path, overrides: dict | None = None) -> Case:
+    """Build case ``name`` with validated ``overrides`` (keys and values: docs/scenes.md);
+    a ``name`` ending in ``.toml`` is a scene file (docs/scenes.md, "Scenes from a file")."""
+    if str(name).lower().endswith(".toml"):
+        return scene_file.load(name, overrides)
     if name not in CASES:
-        raise ParameterError(f"unknown case {name!r}: choose one of {', '.join(CASES)}")
+        raise ParameterError(f"unknown case {name!r}: choose one of {', '.join(CASES)} or give a scene file NAME.toml")
     module = CASES[name]
     return module.build(validate(module.SPECS, module.DEFAULTS, overrides or {}, name))
 
 
-__all__ = ["CASES", "Case", "ParameterError", "UnsupportedCase", "get_case", "parse_sets"]
+def rebuild(case: Case, overrides: dict | None = None) -> Case:
+    """``case`` built again from its source with ``case.params`` updated by ``overrides``: a
+    built-in scene by its name, a file scene from the text it was read from (the file is not
+    read again)."""
+    params = {**case.params, **(overrides or {})}
+    if case.source is not None:
+        return scene_file.from_text(case.source.text, case.source.path, params)
+    return get_case(case.name, params)
+
+
+__all__ = ["CASES", "Case", "ParameterError", "UnsupportedCase", "get_case", "parse_sets", "rebuild"]

@@ -23,6 +23,9 @@ class Case:
         sine family of displacements (u_r, u_z ~ sin) carries nothing
     provenance : which values come from the paper and which are this project's choices
     references : published or analytic reference values with their sources
+    source : what :func:`cases.rebuild` builds the case again from: None for a built-in scene
+        (its name), a :class:`cases.scene_file.Source` for a scene read from a file; not part of
+        the case's equality
     """
 
     name: str
@@ -44,6 +47,7 @@ class Case:
     units: str = "SI (m, N, s, Pa, kg/m^3)"
     provenance: dict = field(default_factory=dict)
     references: dict = field(default_factory=dict)
+    source: object = field(default=None, compare=False, repr=False)
 
     def __post_init__(self):
         if self.body not in (RING, PRISM):

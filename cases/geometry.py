@@ -77,6 +77,15 @@ class Section:
             return s * np.sin(t), s * np.cos(t)
         raise ValueError(f"unknown section kind {self.kind!r}")
 
+    def from_x(self, x1, x2):
+        """Inverse of :meth:`to_x`: parametric ``(s, t)`` of section point ``(x1, x2)``."""
+        x1, x2 = np.asarray(x1, float), np.asarray(x2, float)
+        if self.kind == "rect":
+            return x1, x2
+        if self.kind == "polar":
+            return np.hypot(x1, x2), np.arctan2(x1, x2)
+        raise ValueError(f"unknown section kind {self.kind!r}")
+
     def edge(self, name: str) -> str:
         """Parametric edge (one of EDGES) for a named edge or a parametric name."""
         return name if name in EDGES else self.edges[name]

@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import quad
 
 from cases import CASES, ParameterError, get_case, parse_sets
-from cases.geometry import PRISM, RING, Axis, interval_fourier
+from cases.geometry import PRISM, RING, Axis, Section, interval_fourier
 from cases.material import hardening_modulus, lame, sigma_y_from_tau_s, tau_s_from_sigma_y, young_poisson
 
 PROBES = {
@@ -47,6 +47,13 @@ def test_graded_axis_and_refine():
     assert len(axis.grid(1)) == 15 and len(axis.grid(3)) == 43
     assert np.allclose(np.diff(axis.grid(1))[:4], 0.5) and np.allclose(np.diff(axis.grid(1))[4:], 0.8)
     assert len(Axis((0.0, 1.0), (1,), refinable=False).grid(4)) == 2
+
+
+@pytest.mark.parametrize("kind", ["rect", "polar"])
+def test_section_coordinates_round_trip(kind):
+    section = Section(kind, s=Axis((1.0, 2.0), (3,)), t=Axis((0.1, 1.2), (4,)))
+    s, t = np.meshgrid(section.s.grid(), section.t.grid())
+    assert np.allclose(section.from_x(*section.to_x(s, t)), (s, t), rtol=1e-14)
 
 
 @pytest.mark.parametrize("body,length", [(RING, 2 * math.pi), (PRISM, 0.3)])

@@ -1,0 +1,481 @@
+"""Scenes from a TOML file: ``smfem run my_scene.toml`` (docs/scenes.md, "Scenes from a file").
+
+A file describes one body of revolution (``body = "ring"``) or prism (``body = "prism"``) with
+the pieces of :mod:`cases.geometry`. Its ``[params]`` are checked by the specs of ``--set``
+(:data:`cases.params.COMMON` and the built-in scenes' own keys) and then merged with the
+overrides by :func:`cases.params.validate`, the one path of ``--set``. Any number of the scene
+may be written as the name of a parameter in quotes (``q = "q"``, ``value = "-v0"``): it then
+follows ``--set``.
+
+Every mistake in a file is a :class:`ParameterError` of one line that names the file and the
+key (``scene.toml: section.s.counts: ...``); unknown keys are refused. No solver imports here.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+from . import dome, notched_cylinder, notched_strip, rod_impact, thick_cylinder
+from .case import Case
+from .geometry import EDGES, PRISM, RING, Axis, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
+from .material import Material
+from .params import COMMON, MAX_STRESS, ParameterError, Spec, validate
+
+
+def _scene_keys() -> dict[str, Spec]:
+    """The built-in scenes' own keys (q, contrast, notch_depth, v0, gap, ...) with their ranges."""
+    keys: dict[str, Spec] = {}
+    for module in (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact):
+        keys.update({k: spec for k, spec in module.SPECS.items() if k not in COMMON and k not in keys})
+    return keys
+
+
+SCENE_KEYS = _scene_keys()
+
+#: [params] keys a file must give; the other common keys default to OPTIONAL
+REQUIRED = ("dt", "t_end", "harmonics", "E", "nu", "rho", "tau_s")
+OPTIONAL = dict(refine=1, plastic=False, tol=1e-5, dim=2)
+#: scene keys a feature of the scene reads itself: required with it, refused without it
+BOUND = {"contrast": "cutout", "layer_thickness": "wall", "layer_stiffness": "wall"}
+FEATURES = {"cutout": "[[cutout]]", "wall": "[wall]"}
+
+TOP = ("name", "title", "body", "units", "length", "symmetric", "axisymmetric", "params", "material",
+       "section", "load", "support", "cutout", "initial_velocity", "wall", "probe", "references")
+PROBE_KEYS = ("name", "kind", "field", "component", "point", "edge")
+#: probe kind -> the fields it may record
+PROBE_FIELDS = {"point": ("u", "v", "sigma", "peps"), "max": ("peps",), "edge_mean": ("sigma",),
+                "body_mean": ("u", "v")}
+#: most elements in one segment of a section axis (before ``refine``)
+MAX_COUNT = 10_000
+NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
+WORD = re.compile(r"[A-Za-z][A-Za-z0-9_]*")
+TWO_PI = 2 * math.pi
+_MISSING = object()
+
+
+@dataclass(frozen=True)
+class Source:
+    """What a file scene was read from: the path as given and its text (:func:`cases.rebuild`)."""
+
+    path: str
+    text: str
+
+
+def load(path, overrides: dict | None = None) -> Case:
+    """The scene of TOML file ``path`` with validated ``overrides`` (``--set``)."""
+    file = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ParameterError(f"{file}: cannot read the scene file ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise ParameterError(f"{file}: cannot read the scene file (not UTF-8 text)") from None
+    return from_text(text, file, overrides)
+
+
+def from_text(text: str, file: str, overrides: dict | None = None) -> Case:
+    """The scene of TOML ``text`` read from ``file`` (named in every error message)."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(_one_line(f"{file}: not valid TOML: {exc}")) from None
+    return _Scene(file, doc).build(overrides or {}, Source(file, text))
+
+
+def _one_line(message: str) -> str:
+    return message.replace("\r", "\\r").replace("\n", "\\n")
+
+
+class _Table:
+    """One table of the file: typed values, unknown keys refused, numbers that may name a
+    parameter; every mistake one :class:`ParameterError` naming the file and the key."""
+
+    def __init__(self, scene: _Scene, data, where: str, keys: tuple[str, ...] | None, hint: str = ""):
+        self.scene, self.where = scene, where
+        if not isinstance(data, dict):
+            scene.fail(where, f"{data!r} is not a table")
+        unknown = [k for k in data if keys is not None and k not in keys]
+        if unknown:
+            self.fail(unknown[0], f"unknown key: allowed keys are {', '.join(keys)}{hint}")
+        self.data = data
+
+    def fail(self, key: str, message: str):
+        self.scene.fail(self.scene.join(self.where, key), message)
+
+    def has(self, key: str) -> bool:
+        return key in self.data
+
+    def _get(self, key: str, default):
+        if key not in self.data and default is _MISSING:
+            self.fail(key, "missing")
+        return self.data.get(key, default)
+
+    def string(self, key: str, default=_MISSING, choices: tuple[str, ...] | None = None) -> str:
+        value = self._get(key, default)
+        if key not in self.data:
+            return value
+        if not isinstance(value, str):
+            self.fail(key, f"{value!r} is not a string")
+        if choices is not None and value not in choices:
+            self.fail(key, f"{value!r}: choose one of {', '.join(choices)}")
+        return value
+
+    def boolean(self, key: str, default=_MISSING) -> bool:
+        value = self._get(key, default)
+        if not isinstance(value, bool):
+            self.fail(key, f"{value!r} is not true or false")
+        return value
+
+    def integer(self, key: str, lo: int, hi: int, default=_MISSING) -> int | None:
+        value = self._get(key, default)
+        if key in self.data:
+            self.check_integer(key, value, lo, hi)
+        return value
+
+    def check_integer(self, key: str, value, lo: int, hi: int) -> None:
+        if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+            self.fail(key, f"{value!r}: must be an integer in [{lo}, {hi}]")
+
+    def number(self, key: str, default=_MISSING, lo: float = -math.inf, hi: float = math.inf) -> float:
+        value = self._get(key, default)
+        return value if key not in self.data else self.to_number(key, value, lo, hi)
+
+    def to_number(self, key: str, value, lo: float = -math.inf, hi: float = math.inf) -> float:
+        """A number, or the value of the parameter a string names (``"q"``, ``"-v0"``)."""
+        if isinstance(value, str):
+            value = self.scene.parameter(self, key, value)
+        elif isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            self.fail(key, f"{value!r} is not a number: write a finite number or a parameter's name in quotes")
+        if not lo <= value <= hi:
+            self.fail(key, f"{value!r} is out of range: must be in [{lo:g}, {hi:g}]")
+        return float(value)
+
+    def array(self, key: str, default=_MISSING) -> list:
+        value = self._get(key, default)
+        if not isinstance(value, list):
+            self.fail(key, f"{value!r} is not an array")
+        return value
+
+    def numbers(self, key: str, size: int | None = None) -> tuple[float, ...]:
+        values = self.array(key)
+        if size is not None and len(values) != size:
+            self.fail(key, f"{values!r}: give {size} numbers")
+        return tuple(self.to_number(key, v) for v in values)
+
+    def table(self, key: str, keys: tuple[str, ...] | None, hint: str = "", default=_MISSING) -> _Table:
+        return _Table(self.scene, self._get(key, default), self.scene.join(self.where, key), keys, hint)
+
+    def tables(self, key: str, keys: tuple[str, ...]) -> list[_Table]:
+        """An array of tables ``[[key]]``; counted from 1 in messages (``load[1].q``)."""
+        items = self._get(key, [])
+        if not isinstance(items, list):
+            self.fail(key, f"write [[{key}]] (an array of tables), not [{key}]")
+        return [_Table(self.scene, item, f"{self.scene.join(self.where, key)}[{i}]", keys)
+                for i, item in enumerate(items, 1)]
+
+
+class _Scene:
+    """Reads one file's document into a :class:`Case`, in order: params, section, the rest."""
+
+    def __init__(self, file: str, doc: dict):
+        self.file = file
+        self.top = _Table(self, doc, "", TOP)
+        self.params: dict = {}
+        self.named: set[str] = set()  # the parameters some value names
+
+    def fail(self, where: str, message: str):
+        raise ParameterError(_one_line(f"{self.file}: {where}: {message}"))
+
+    @staticmethod
+    def join(where: str, key: str) -> str:
+        return f"{where}.{key}" if where else key
+
+    def parameter(self, table: _Table, key: str, text: str) -> float:
+        """The value of the parameter that ``text`` names, negated for a leading ``-``."""
+        sign, name = (-1.0, text[1:]) if text.startswith("-") else (1.0, text)
+        value = self.params.get(name)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            numeric = ", ".join(k for k, v in self.params.items() if not isinstance(v, bool))
+            table.fail(key, f"{text!r} names no parameter: write a number, or in quotes a key of [params] "
+                            f"({numeric}), with a leading - for its negative")
+        self.named.add(name)
+        return sign * value
+
+    def build(self, overrides: dict, source: Source) -> Case:
+        top = self.top
+        name = top.string("name")
+        if not NAME.fullmatch(name):
+            top.fail("name", f"{name!r}: letters, digits, '_', '-' and '.' only (it names the output directory)")
+        self.body = body = top.string("body", choices=(RING, PRISM))
+        features = {"cutout": bool(top.data.get("cutout")), "wall": top.has("wall")}
+        params = top.table("params", tuple(COMMON) + tuple(SCENE_KEYS))
+        self.params = p = self.read_params(params, features, name, overrides)
+        if body == PRISM:
+            self.length = top.number("length", lo=0.0)
+            if self.length <= 0:
+                top.fail("length", f"{self.length!r} is out of range: the prism's length must be > 0")
+        elif top.has("length"):
+            top.fail("length", "a ring goes 2 pi round: length is for body = \"prism\" only")
+        else:
+            self.length = TWO_PI
+        self.section = self.read_section(top.table("section", ("kind", "s", "t", "edges")))
+        material = top.table("material", ("E_T",), default={},
+                             hint=" (E, nu, rho, tau_s and plastic are parameters: give them in [params])")
+        E_T = material.number("E_T", 0.0, lo=0.0)
+        if E_T >= p["E"]:
+            material.fail("E_T", f"{E_T!r} is out of range: the tangent modulus must be below E={p['E']:g}")
+        loads = tuple(self.read_load(t) for t in top.tables("load", ("q", "edge", "x3_intervals", "mode")))
+        cutouts = tuple(self.read_cutout(t) for t in top.tables("cutout", ("s_range", "t_range", "x3_intervals")))
+        wall = self.read_wall(top.table("wall", ("edge", "gap", "friction", "slope"))) if features["wall"] else None
+        probes = tuple(self.read_probe(t) for t in top.tables("probe", PROBE_KEYS))
+        if not probes:
+            top.fail("probe", "missing: a scene needs at least one [[probe]] (the columns of history.csv)")
+        case = Case(
+            name=name, title=top.string("title", name), body=body, section=self.section,
+            material=Material(p["E"], p["nu"], p["rho"], p["tau_s"], E_T=E_T, plastic=p["plastic"]),
+            loads=loads, supports=tuple(self.read_support(t) for t in top.tables("support", ("edge", "components"))),
+            probes=probes, params=p, length=self.length, cutouts=tuple(c for c in cutouts if c is not None),
+            contrast=p.get("contrast", 1.0),
+            initial_velocity=tuple(self.read_velocity(t) for t in top.tables("initial_velocity", ("component", "value"))),
+            wall=wall, units=top.string("units", Case.__dataclass_fields__["units"].default),
+            references=self.read_references(top, probes), source=source,
+            **self.read_symmetry(top, loads, cutouts, wall),
+        )
+        self.check_unused(params, features)
+        return case
+
+    def read_params(self, table: _Table, features: dict, name: str, overrides: dict) -> dict:
+        """The file's parameters, each checked by its spec as ``--set`` checks it, then merged
+        with ``overrides`` by :func:`validate`."""
+        specs, defaults = dict(COMMON), dict(OPTIONAL)
+        for key, value in table.data.items():
+            specs[key] = COMMON.get(key) or SCENE_KEYS[key]
+            try:
+                defaults[key] = specs[key].check(key, value)
+            except ParameterError as exc:
+                table.fail(key, str(exc))
+        for key in REQUIRED + tuple(k for k, feature in BOUND.items() if features[feature]):
+            if key not in table.data:
+                why = f" (a scene with {FEATURES[BOUND[key]]} needs it)" if key in BOUND else ""
+                table.fail(key, f"missing{why}: {(COMMON.get(key) or SCENE_KEYS[key]).help}")
+        try:
+            validate(specs, defaults, {}, name)
+        except ParameterError as exc:
+            self.fail("params", str(exc))
+        return validate(specs, defaults, overrides, name)
+
+    def check_unused(self, table: _Table, features: dict) -> None:
+        """Refuse a scene key that nothing reads: a --set of it would change nothing."""
+        for key in table.data:
+            if key in COMMON or key in self.named:
+                continue
+            if key not in BOUND:
+                table.fail(key, f"no value of the scene names it (write e.g. q = \"{key}\" where it belongs)")
+            if not features[BOUND[key]]:
+                table.fail(key, f"the scene has no {FEATURES[BOUND[key]]} to use it")
+
+    def read_section(self, t: _Table) -> Section:
+        kind = t.string("kind", choices=("rect", "polar"))
+        s, tt = self.read_axis(t, "s"), self.read_axis(t, "t")
+        if kind == "polar" and s.breaks[0] <= 0:
+            t.fail("s.breaks", f"{s.breaks[0]!r}: a polar section's radius s must be > 0")
+        if kind == "polar" and not 0 <= tt.breaks[0] <= tt.breaks[-1] <= math.pi:
+            t.fail("t.breaks", "a polar section's angle t from the axis must lie in [0, pi]")
+        if self.body == RING and kind == "rect" and s.breaks[0] < 0:
+            t.fail("s.breaks", f"{s.breaks[0]!r}: the radius r = s of a ring's section must be >= 0")
+        edges = t.table("edges", None, default={})
+        for name in edges.data:
+            edges.string(name, choices=EDGES)
+            if name in EDGES or name == "all" or not WORD.fullmatch(name):
+                edges.fail(name, "not a name for an edge: a word of letters, digits and '_', not all or "
+                                 + ", ".join(EDGES))
+        return Section(kind, s, tt, dict(edges.data))
+
+    def read_axis(self, section: _Table, key: str) -> Axis:
+        t = section.table(key, ("breaks", "counts", "refinable"))
+        breaks = t.numbers("breaks")
+        if len(breaks) < 2 or any(b <= a for a, b in zip(breaks, breaks[1:])):
+            t.fail("breaks", f"{list(breaks)!r}: give at least two numbers, strictly increasing")
+        counts = t.array("counts")
+        if len(counts) != len(breaks) - 1:
+            t.fail("counts", f"{counts!r}: give one count per segment between breaks ({len(breaks) - 1})")
+        for n in counts:
+            t.check_integer("counts", n, 1, MAX_COUNT)
+        return Axis(breaks, tuple(counts), t.boolean("refinable", True))
+
+    def edge(self, t: _Table, key: str, allow_all: bool = False) -> str:
+        names = tuple(self.section.edges) + EDGES + (("all",) if allow_all else ())
+        return t.string(key, choices=names)
+
+    def intervals(self, t: _Table, key: str) -> tuple[tuple[float, float], ...]:
+        """Intervals along x3 inside the body (prism: [0, length]; ring: [-2 pi, 2 pi], at most
+        once round), none overlapping."""
+        pairs = t.array(key)
+        lo, hi, text = (0.0, self.length, f"[0, length = {self.length:g}]") if self.body == PRISM else \
+            (-TWO_PI, TWO_PI, "[-2 pi, 2 pi] (radians)")
+        out = []
+        for pair in pairs:
+            if not isinstance(pair, list) or len(pair) != 2:
+                t.fail(key, f"{pair!r}: each interval is a pair [a, b]")
+            a, b = (t.to_number(key, v) for v in pair)
+            if not lo <= a < b <= hi:
+                t.fail(key, f"[{a:g}, {b:g}] is outside the body or empty: need a < b within {text}")
+            out.append((a, b))
+        if not out:
+            t.fail(key, "empty: give at least one interval [a, b]")
+        total = sum(b - a for a, b in out)
+        covered = _measure(_on_circle(out) if self.body == RING else _merged(out))
+        if covered < total - 1e-12 * (hi - lo):
+            t.fail(key, f"{[list(p) for p in out]!r}: the intervals overlap (a ring's angles count modulo 2 pi)")
+        return tuple(out)
+
+    def read_load(self, t: _Table) -> Pressure:
+        q = t.number("q", lo=-MAX_STRESS, hi=MAX_STRESS)
+        edge = self.edge(t, "edge")
+        if t.has("mode") == t.has("x3_intervals"):
+            t.fail("x3_intervals", "give either x3_intervals (where along x3 the pressure acts) or mode (one "
+                                   "Fourier term), " + ("not both" if t.has("mode") else "missing both"))
+        mode = t.integer("mode", 0 if self.body == RING else 1, 2000, None)
+        return Pressure(q, edge, () if mode is not None else self.intervals(t, "x3_intervals"), mode)
+
+    def read_support(self, t: _Table) -> Support:
+        edge = self.edge(t, "edge", allow_all=True)
+        components = t.array("components")
+        for c in components:
+            t.check_integer("components", c, 1, 3)
+        if not components or len(set(components)) != len(components):
+            t.fail("components", f"{components!r}: give distinct components among 1, 2, 3")
+        return Support(edge, tuple(components))
+
+    def read_cutout(self, t: _Table) -> Cutout | None:
+        """A cut-out, or None where its section box is empty (so ``notch_depth = 0`` is no notch)."""
+        box = []
+        for key, axis in (("s_range", self.section.s), ("t_range", self.section.t)):
+            a, b = t.numbers(key, 2)
+            lo, hi = axis.span
+            if not lo <= a <= b <= hi:
+                t.fail(key, f"[{a:g}, {b:g}] is outside the section: need {lo:g} <= a <= b <= {hi:g}")
+            box.append((a, b))
+        intervals = self.intervals(t, "x3_intervals")
+        return None if any(a == b for a, b in box) else Cutout(box[0], box[1], intervals)
+
+    def read_velocity(self, t: _Table) -> InitialVelocity:
+        return InitialVelocity(t.integer("component", 1, 3), t.number("value"))
+
+    def read_wall(self, t: _Table) -> Wall:
+        return Wall(self.edge(t, "edge"), t.number("gap", lo=0.0), t.number("friction", lo=0.0),
+                    t.number("slope", 0.0, lo=0.0))
+
+    def read_probe(self, t: _Table) -> Probe:
+        name = t.string("name")
+        if not WORD.fullmatch(name) or name == "t":
+            t.fail("name", f"{name!r}: a word of letters, digits and '_' (a column of history.csv), not t")
+        kind = t.string("kind", choices=tuple(PROBE_FIELDS))
+        field = t.string("field", choices=PROBE_FIELDS[kind])
+        needs = {"point": ("point",), "edge_mean": ("edge",)}.get(kind, ())
+        for key in ("point", "edge"):
+            if t.has(key) != (key in needs):
+                t.fail(key, f"a {kind} probe needs a {key}" if key in needs else f"not for a {kind} probe")
+        component = tuple(t.array("component", []))
+        if field in ("u", "v"):
+            if len(component) != 1:
+                t.fail("component", f"{list(component)!r}: a vector field needs one component, e.g. [2]")
+            t.check_integer("component", component[0], 1, 3)
+        elif field == "sigma" and kind == "edge_mean":
+            if component != ("n", "n"):
+                t.fail("component", f"{list(component)!r}: the mean stress on an edge is [\"n\", \"n\"] (normal)")
+        elif field == "sigma":
+            if len(component) != 2:
+                t.fail("component", f"{list(component)!r}: a stress needs two components, e.g. [2, 2]")
+            for c in component:
+                t.check_integer("component", c, 1, 3)
+        elif component:
+            t.fail("component", "the plastic strain intensity has no component")
+        point = t.numbers("point", 3) if kind == "point" else None
+        if point is not None:
+            self.check_point(t, point)
+        return Probe(name, kind, field, component, point, self.edge(t, "edge") if kind == "edge_mean" else None)
+
+    def check_point(self, t: _Table, point: tuple[float, float, float]) -> None:
+        """The point lies in the section (to round-off) and along x3 in the body."""
+        s, tt = (float(v) for v in self.section.from_x(point[0], point[1]))
+        for value, axis in ((s, self.section.s), (tt, self.section.t)):
+            lo, hi = axis.span
+            slack = 1e-9 * max(abs(lo), abs(hi), hi - lo)
+            if not lo - slack <= value <= hi + slack:
+                t.fail("point", f"{list(point)!r} is outside the section")
+        lo, hi = (0.0, self.length) if self.body == PRISM else (-TWO_PI, TWO_PI)
+        if not lo <= point[2] <= hi:
+            t.fail("point", f"x3 = {point[2]:g} is outside the body: need {lo:g} <= x3 <= {hi:g}")
+
+    def read_symmetry(self, top: _Table, loads, cutouts, wall: Wall | None) -> dict:
+        """``symmetric`` and ``axisymmetric`` (ring only), each checked against the loads and
+        cut-outs: a wrong claim would make a solver leave out harmonics that carry the answer."""
+        if self.body == PRISM:
+            for key in ("symmetric", "axisymmetric"):
+                if top.has(key):
+                    top.fail(key, "for body = \"ring\" only (a prism's series is symmetric about mid-span)")
+            return {}
+        symmetric, axisymmetric = top.boolean("symmetric", False), top.boolean("axisymmetric", False)
+        pieces = [(f"load[{i}]", x.mode, x.x3_intervals) for i, x in enumerate(loads, 1)] + \
+                 [(f"cutout[{i}]", None, x.x3_intervals) for i, x in enumerate(cutouts, 1) if x is not None]
+        for where, mode, intervals in pieces:
+            circle = _on_circle(intervals)
+            if axisymmetric and not (mode == 0 or _same(circle, [(0.0, TWO_PI)])):
+                top.fail("axisymmetric", f"true, but {where} varies along x3 (give it mode = 0 or x3_intervals = "
+                                         "[[0, 2 pi]], or set axisymmetric = false)")
+            if symmetric and mode is None and not _same(circle, _on_circle([(-b, -a) for a, b in intervals])):
+                top.fail("symmetric", f"true, but {where} is not symmetric about x3 = 0 (set symmetric = false)")
+        if axisymmetric and wall is not None and wall.slope > 0:
+            top.fail("axisymmetric", f"true, but the wall's slope is {wall.slope:g} > 0 (set axisymmetric = false)")
+        return {"symmetric": symmetric, "axisymmetric": axisymmetric}
+
+    def read_references(self, top: _Table, probes: tuple[Probe, ...]) -> dict:
+        """What the runs and reports read besides the scene: ``plastic_zone_times`` (s),
+        ``comparison_window_s`` and ``singular_probes`` (probe -> why it has no converged truth)."""
+        t = top.table("references", ("plastic_zone_times", "comparison_window_s", "singular_probes"), default={})
+        out = {}
+        if t.has("plastic_zone_times"):
+            out["plastic_zone_times"] = tuple(t.to_number("plastic_zone_times", v, lo=0.0)
+                                              for v in t.array("plastic_zone_times"))
+        if t.has("comparison_window_s"):
+            out["comparison_window_s"] = t.number("comparison_window_s", lo=0.0)
+        if t.has("singular_probes"):
+            singular = t.table("singular_probes", tuple(p.name for p in probes))
+            out["singular_probes"] = {k: singular.string(k) for k in singular.data}
+        return out
+
+
+def _merged(pieces) -> list[tuple[float, float]]:
+    """Sorted intervals with the overlapping or touching ones joined."""
+    out: list[tuple[float, float]] = []
+    for a, b in sorted(pieces):
+        if out and a <= out[-1][1]:
+            out[-1] = (out[-1][0], max(b, out[-1][1]))
+        else:
+            out.append((a, b))
+    return out
+
+
+def _on_circle(intervals) -> list[tuple[float, float]]:
+    """Angular intervals as merged pieces of [0, 2 pi)."""
+    pieces = []
+    for a, b in intervals:
+        if b - a >= TWO_PI:
+            return [(0.0, TWO_PI)]
+        a0 = a % TWO_PI
+        b0 = a0 + (b - a)
+        pieces += [(a0, b0)] if b0 <= TWO_PI else [(a0, TWO_PI), (0.0, b0 - TWO_PI)]
+    return _merged(pieces)
+
+
+def _measure(pieces) -> float:
+    return sum(b - a for a, b in pieces)
+
+
+def _same(x, y, tol: float = 1e-9) -> bool:
+    return len(x) == len(y) and all(abs(a - c) <= tol and abs(b - d) <= tol for (a, b), (c, d) in zip(x, y))
