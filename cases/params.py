@@ -34,6 +34,10 @@ class UnsupportedCase(ValueError):
     """
 
 
+class ToolMissing(UnsupportedCase):
+    """An optional external program a solver runs (CalculiX's ``ccx``) is not installed."""
+
+
 @dataclass(frozen=True)
 class Spec:
     """Allowed values of one parameter: type, bounds (inclusive unless ``open_*``), choices."""

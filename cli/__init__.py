@@ -11,10 +11,10 @@ import sys
 
 from cases import ParameterError, UnsupportedCase
 
-from . import cases_cmd, compare, run, study, truth
+from . import cases_cmd, compare, export, run, study, truth
 from .usage import EXIT_USAGE, Parser, UsageError
 
-SUBCOMMANDS = (cases_cmd, run, compare, study, truth)
+SUBCOMMANDS = (cases_cmd, run, export, compare, study, truth)
 
 
 def build_parser() -> Parser:

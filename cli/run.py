@@ -8,7 +8,7 @@ from pathlib import Path
 
 from cases import get_case, parse_sets
 from runs.files import write_run
-from runs.registry import REFERENCE, SMFEM, solve
+from runs.registry import CALCULIX, REFERENCE, SMFEM, solve
 
 from .usage import EXIT_NOT_CONVERGED, UsageError, add_sets, check_writable
 
@@ -16,7 +16,8 @@ from .usage import EXIT_NOT_CONVERGED, UsageError, add_sets, check_writable
 def add(sub) -> None:
     run = sub.add_parser("run", help="run one case and write history.csv, summary.json, fields.vtu")
     run.add_argument("case")
-    run.add_argument("--solver", choices=(SMFEM, REFERENCE), default=SMFEM)
+    run.add_argument("--solver", choices=(SMFEM, REFERENCE, CALCULIX), default=SMFEM,
+                     help="calculix: CalculiX (ccx on PATH) on the reference mesh, --set dim=2|3")
     add_sets(run)
     run.add_argument("--out", default=None, help="output directory (default: out/CASE-SOLVER)")
     run.add_argument("--no-fields", action="store_true", help="do not write fields.vtu")
@@ -32,6 +33,8 @@ def command(args) -> int:
         raise UsageError(f"--every {args.every}: between 1 and the case's {case.n_steps} steps (0: no time series)")
     out = Path(args.out or f"out/{case.name}-{args.solver}")
     check_writable(out)
+    if args.solver == CALCULIX and args.every:
+        raise UsageError("--every: the time series is written by smfem and reference only")
     from tqdm import tqdm
 
     bar = tqdm(total=case.n_steps, desc=f"{case.name} ({args.solver})", unit="step",

@@ -36,16 +36,6 @@ def representation(case) -> str:
     return PLANE_STRAIN
 
 
-def section_params(section, x1, x2):
-    """Inverse of ``Section.to_x``: parametric ``(s, t)`` of section points ``(x1, x2)``."""
-    x1, x2 = np.asarray(x1, float), np.asarray(x2, float)
-    if section.kind == "rect":
-        return x1, x2
-    if section.kind == "polar":
-        return np.hypot(x1, x2), np.arctan2(x1, x2)
-    raise ValueError(f"unknown section kind {section.kind!r}")
-
-
 def to_cartesian(case, rep: str, x: np.ndarray) -> np.ndarray:
     """Cartesian points, shape ``(3, n)``, of mesh points ``x``, shape ``(dim, n)``.
 
@@ -119,7 +109,7 @@ def section_of(case, rep: str, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         x1, x2 = xc[1], xc[2]
         if rep == PLANE_STRAIN:
             x1 = np.full_like(x2, np.nan)
-    return section_params(case.section, x1, x2)
+    return case.section.from_x(x1, x2)
 
 
 def in_intervals(x3, intervals, period: float | None) -> np.ndarray:

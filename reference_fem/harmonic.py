@@ -28,7 +28,6 @@ from skfem import CellBasis, ElementQuad2, FacetBasis, LinearForm, asm
 from cases.geometry import PRISM, RING, interval_fourier
 from cases.params import UnsupportedCase
 
-from .frames import section_params
 from .mesh import Block, assemble_blocks, axis_nodes
 from .model import INTORDER
 
@@ -298,4 +297,4 @@ def _psi(case, l: int, comp: int, x3: float) -> float:
 
 def _section_params(sec, x: np.ndarray):
     """Parametric ``(s, t)`` of section points ``x``, shape ``(2, n)``."""
-    return section_params(sec, x[0], x[1])
+    return sec.from_x(x[0], x[1])

@@ -29,12 +29,13 @@ from typing import Callable
 
 import numpy as np
 from skfem import ElementHex2, ElementQuad2, MeshHex1, MeshHex2, MeshQuad1, MeshQuad2
+from skfem.io.meshio import HEX_MAPPING
 from skfem.mapping import MappingIsoparametric
 
 from cases.params import UnsupportedCase
 from cases.geometry import RING
 
-from .frames import AXISYMMETRIC, PLANE_STRAIN, SOLID, in_intervals, representation, section_of, section_params, x3_of
+from .frames import AXISYMMETRIC, PLANE_STRAIN, SOLID, in_intervals, representation, section_of, x3_of
 
 #: elements around the circumference of a (non-axisymmetric) ring at refine = 1: the
 #: circumferential direction dominates the error of the thick cylinder, in 2D and in 3D
@@ -213,7 +214,7 @@ def _breaks(case, rep: str):
         x3_extra += [x for iv in load.x3_intervals for x in iv]
     for p in case.probes:
         if p.kind == "point" and p.field == "u":
-            s, t = section_params(case.section, p.point[0], p.point[1])
+            s, t = case.section.from_x(p.point[0], p.point[1])
             s_extra.append(float(s))
             t_extra.append(float(t))
             x3_extra.append(p.point[2])
@@ -357,6 +358,16 @@ def _merge(points: np.ndarray, scale: float):
     key = np.round(points / (1e-9 * scale)).astype(np.int64)
     _, first, inverse = np.unique(key.T, axis=0, return_index=True, return_inverse=True)
     return inverse.ravel(), points[:, first]
+
+
+def vtk_cells(mesh: MeshQuad2 | MeshHex2) -> tuple[str, np.ndarray]:
+    """The elements as VTK cells, ``('quad9' | 'hexahedron27', (n_elements, 9 | 27))`` node
+    indices; their first 8 or 20 nodes are also Abaqus's CPE8/CAX8 or C3D20 in its order."""
+    cells = mesh.dofs.element_dofs
+    if mesh.dim() == 2:
+        return "quad9", cells.T
+    # scikit-fem's reference hexahedron is left-handed in VTK's node order: mirror it
+    return "hexahedron27", cells[mirror_permutation(ElementHex2.doflocs)][HEX_MAPPING].T
 
 
 def mirror_permutation(ref: np.ndarray) -> list[int]:

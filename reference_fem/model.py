@@ -103,16 +103,21 @@ class Model:
         x = mesh.p[:, mesh.facets[:, facets].ravel()]
         return facets[np.all(mask_of_points(x).reshape(mesh.facets.shape[0], -1), axis=0)]
 
+    def load_facets(self, load) -> np.ndarray:
+        """Boundary facets a pressure ``load`` acts on (its edge, within its x3 intervals)."""
+        facets = self.edge_facets(load.edge)
+        if self.rep != AXISYMMETRIC:
+            period = 2 * np.pi if self.case.body == RING else None
+            return facets[in_intervals(x3_of(self.case, self.rep, self._facet_midpoints(facets)),
+                                       load.x3_intervals, period)]
+        if not np.isclose(sum(b - a for a, b in load.x3_intervals), 2 * np.pi):
+            raise UnsupportedCase("reference solver: a load that is not axisymmetric needs dim=3")
+        return facets
+
     def _load_vector(self) -> np.ndarray:
         Q = np.zeros(self.basis.N)
-        period = 2 * np.pi if self.case.body == RING else None
         for load in self.case.loads:
-            facets = self.edge_facets(load.edge)
-            if self.rep != AXISYMMETRIC:
-                facets = facets[in_intervals(x3_of(self.case, self.rep, self._facet_midpoints(facets)),
-                                             load.x3_intervals, period)]
-            elif not np.isclose(sum(b - a for a, b in load.x3_intervals), 2 * np.pi):
-                raise UnsupportedCase("reference solver: a load that is not axisymmetric needs dim=3")
+            facets = self.load_facets(load)
             fb = FacetBasis(self.rmesh.mesh, self.element, facets=facets, intorder=INTORDER)
             x = np.asarray(fb.global_coordinates())
             weight = x[0] if self.rep == AXISYMMETRIC else np.ones_like(x[0])
@@ -184,6 +189,15 @@ class Model:
             node = int(np.argmin(np.where(inner, np.hypot(p[0] - target[0], p[1] - target[1]), np.inf)))
             out.append(node * self.dim + comp)
         return np.array(out)
+
+    def initial_velocity(self) -> np.ndarray:
+        """The case's uniform initial velocity as a full dof vector, zero on supported dofs (m/s)."""
+        v = np.zeros(self.basis.N)
+        for iv in self.case.initial_velocity:
+            for c in self.mesh_components((iv.component,)):
+                v[c :: self.dim] = iv.value
+        v[self.fixed] = 0.0
+        return v
 
     def nodal_displacement(self, u: np.ndarray) -> np.ndarray:
         """Mesh-frame displacement at the mesh nodes, shape ``(dim, n_nodes)``."""

@@ -7,15 +7,13 @@ from typing import Callable
 
 import meshio
 import numpy as np
-from skfem import ElementHex2
-from skfem.io.meshio import HEX_MAPPING
 
 from cases.params import UnsupportedCase
 from cases.result import RunResult
 
 from .equilibrium import Elastic, NotConverged, Plastic
 from .frames import AXISYMMETRIC, mesh_frame_to_cartesian, to_cartesian
-from .mesh import build_mesh, mirror_permutation
+from .mesh import build_mesh, vtk_cells
 from .model import INTORDER, Model
 from .newmark import march, newmark_constants
 from .probes import Probes, mandel_to_tensor
@@ -70,7 +68,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     probes = Probes(model)
     free = model.free
     u_full, v_full, a_full = (np.zeros(model.basis.N) for _ in range(3))
-    zero, v0 = np.zeros(free.size), _initial_velocity(model)
+    zero, v0 = np.zeros(free.size), model.initial_velocity()[free]
     v_full[free] = v0
     log = ContactLog(system, model.rep == AXISYMMETRIC) if case.wall is not None else None
     if log:
@@ -137,15 +135,6 @@ def static(case, factors=(1.0,)) -> tuple[Model, list[np.ndarray], list[int], ob
     return model, out, iterations, system
 
 
-def _initial_velocity(model: Model) -> np.ndarray:
-    """Uniform initial velocity of the case on the free dofs (m/s)."""
-    v = np.zeros(model.basis.N)
-    for iv in model.case.initial_velocity:
-        for c in model.mesh_components((iv.component,)):
-            v[c :: model.dim] = iv.value
-    return v[model.free]
-
-
 def output_mesh(model: Model, u_full: np.ndarray, system, v_full: np.ndarray) -> meshio.Mesh:
     """meshio mesh of the quadratic elements with the displacement and velocity (cartesian, 3
     components) and the element mean of the stress (a cartesian tensor)."""
@@ -156,17 +145,13 @@ def output_mesh(model: Model, u_full: np.ndarray, system, v_full: np.ndarray) ->
         x = np.zeros((3, mesh.p.shape[1]))
         x[: model.dim] = model.nodal_displacement(values)
         vectors[name] = (to_frame @ x).T
-    cells = mesh.dofs.element_dofs
-    cell_type = "quad9" if model.dim == 2 else "hexahedron27"
-    if model.dim == 3:
-        # scikit-fem's reference hexahedron is left-handed in VTK's node order: mirror it
-        cells = cells[mirror_permutation(ElementHex2.doflocs)][HEX_MAPPING]
+    cell_type, cells = vtk_cells(mesh)
     # the element mean of the stress at its quadrature points, cartesian (9 components: a tensor to ParaView)
     sigma = mandel_to_tensor(system.sigma).reshape(mesh.nelements, -1, 3, 3).mean(axis=1)
     cell_data = {"stress": [(to_frame @ sigma @ to_frame.T).reshape(-1, 9)]}
     if case.material.plastic:
         cell_data["peps"] = [system.peps.reshape(mesh.nelements, -1).mean(axis=1)]
-    return meshio.Mesh(to_cartesian(case, rep, mesh.p).T, {cell_type: cells.T}, point_data=vectors, cell_data=cell_data)
+    return meshio.Mesh(to_cartesian(case, rep, mesh.p).T, {cell_type: cells}, point_data=vectors, cell_data=cell_data)
 
 
 def _info(model: Model, system, cpu_mesh: float) -> dict:

@@ -22,7 +22,7 @@ import pandas as pd
 
 from cases import get_case
 
-from .jobs import FAILED, Job, Outcome
+from .jobs import FAILED, NOT_INSTALLED, Job, Outcome
 from .plan import MODAL, SMFEM
 
 #: packages whose source decides a solver's results
@@ -93,9 +93,9 @@ class RunCache:
         return _read(job, record["status"], record["message"], path)
 
     def store(self, job: Job, outcome: Outcome) -> Run:
-        """Write ``outcome`` atomically (a crash leaves no half run); a failure is not kept,
-        so the next build tries again."""
-        if outcome.status == FAILED:
+        """Write ``outcome`` atomically (a crash leaves no half run); a failure or a missing
+        program is not kept, so the next build tries again."""
+        if outcome.status in (FAILED, NOT_INSTALLED):
             return Run(job, outcome.status, outcome.message, None)
         path = self.path(job)
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -13,11 +13,12 @@ import numpy as np  # noqa: E402
 
 from .analysis import CaseAnalysis  # noqa: E402
 from .metrics import TARGETS, TRUTH_MARGIN  # noqa: E402
-from .plan import REF2D, REF3D, SMFEM  # noqa: E402
+from .plan import CALCULIX, REF2D, REF3D, SMFEM  # noqa: E402
 from .references import published_points, theory_curves  # noqa: E402
 
-STYLE = {SMFEM: dict(color="C0", marker="o"), REF2D: dict(color="C1", marker="s"), REF3D: dict(color="C2", marker="^")}
-LABEL = {SMFEM: "SMFEM", REF2D: "reference FEM 2D", REF3D: "reference FEM 3D"}
+STYLE = {SMFEM: dict(color="C0", marker="o"), REF2D: dict(color="C1", marker="s"), REF3D: dict(color="C2", marker="^"),
+         CALCULIX: dict(color="C4", marker="D")}
+LABEL = {SMFEM: "SMFEM", REF2D: "reference FEM 2D", REF3D: "reference FEM 3D", CALCULIX: "CalculiX 2D"}
 
 
 def work_precision(an: CaseAnalysis, path: Path) -> Path:

@@ -13,18 +13,22 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cases import UnsupportedCase, get_case
+from cases.params import ToolMissing
 from runs.files import write_run
 from runs.registry import family, solve
 
 from .plan import MODAL, REF3D, SMFEM
 
 OK, NOT_CONVERGED, NOT_AVAILABLE, FAILED = "ok", "not converged", "not available", "failed"
+#: an optional solver whose program is not on this machine (CalculiX): not kept in the cache,
+#: left out of the tables, named in the case's section
+NOT_INSTALLED = "not installed"
 
 
 @dataclass(frozen=True)
 class Job:
     """A case with overrides, run by one solver (``smfem``, ``reference-2d``, ``reference-3d``,
-    ``reference-modal``).
+    ``reference-modal``, ``calculix``).
 
     ``overrides`` is a sorted tuple of ``(key, value)`` so that a job can be hashed; ``fields``
     asks an SMFEM run for ``fields.vtu`` and its time series ``fields.pvd`` (and plastic zones,
@@ -81,6 +85,8 @@ def execute(job: Job) -> Outcome:
     wall0 = time.perf_counter()
     try:
         result = solve(job.solver, case, fields=job.fields, every=series_every(case) if job.fields else 0)
+    except ToolMissing as exc:
+        return Outcome(NOT_INSTALLED, str(exc))
     except UnsupportedCase as exc:
         return Outcome(NOT_AVAILABLE, str(exc))
     except Exception as exc:  # noqa: BLE001 - reported per run, see the docstring

@@ -12,10 +12,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from cases import ParameterError, get_case
-from runs.registry import MODAL, REF2D, REF3D, SMFEM
+from runs.registry import CALCULIX, MODAL, REF2D, REF3D, SMFEM
 
-#: the solvers a study has series of (the modal solution, ``MODAL``, makes truths only)
-SOLVERS = (SMFEM, REF2D, REF3D)
+#: the solvers a study has series of (the modal solution, ``MODAL``, makes truths only;
+#: CalculiX, optional, one run per case at the case's settings in 2D)
+SOLVERS = (SMFEM, REF2D, REF3D, CALCULIX)
 #: the ``--set`` keys that make a level
 RESOLUTION_KEYS = ("refine", "harmonics", "dt")
 #: time steps of the quick study's 3-D series, as divisors of the case's: twice, once and half
@@ -105,6 +106,7 @@ def quick() -> tuple[CaseStudy, ...]:
             _s(SMFEM, *grid("dome", _r(1, 2, 4, 8), (1, 2, 4, 8))),
             _s(REF2D, *grid("dome", _r(1, 2, 4), (1, 2, 4))),
             _s(REF3D, *grid("dome", _r(1), THREE_D)),
+            _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 8}), truth=TruthPlan(MODAL_TRUTH, refine=(1, 2, 4))),
         CaseStudy("thick_cylinder", (
             _s(SMFEM, *grid("thick_cylinder", ({"harmonics": 20}, {"refine": 2, "harmonics": 40},
@@ -112,6 +114,7 @@ def quick() -> tuple[CaseStudy, ...]:
                *grid("thick_cylinder", ({"refine": 4, "harmonics": 80}, {"refine": 8, "harmonics": 160}), (64,))),
             _s(REF2D, *grid("thick_cylinder", _r(1), (1, 2, 4, 8, 16)), *grid("thick_cylinder", _r(2), (1, 2, 4, 8))),
             _s(REF3D, *grid("thick_cylinder", _r(1), THREE_D)),
+            _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 3}),
             truth=TruthPlan(MODAL_TRUTH, refine=(2, 4, 8), harmonics=(160, 320, 640))),
         CaseStudy("notched_cylinder", (
@@ -119,17 +122,20 @@ def quick() -> tuple[CaseStudy, ...]:
                                                  {"refine": 2, "harmonics": 80}), (1, 2, 4))),
             _s(REF2D, *grid("notched_cylinder", _r(1), (1, 2, 4)), {"refine": 2}, {"refine": 3}),
             _s(REF3D, *grid("notched_cylinder", _r(1), THREE_D)),
+            _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 3}), truth=TruthPlan(TIME_TRUTH, refine=(1, 2, 3))),
         CaseStudy("notched_strip", (
             _s(SMFEM, *grid("notched_strip", ({"harmonics": 40}, {"harmonics": 80}, {"harmonics": 120},
                                               {"harmonics": 160}), (1, 2, 4))),
             _s(REF2D, *grid("notched_strip", _r(1), (1, 2, 4)), {"refine": 2}),
             _s(REF3D, *grid("notched_strip", _r(1), THREE_D)),
+            _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 2}), truth=TruthPlan(TIME_TRUTH, refine=(1, 2))),
         CaseStudy("rod_impact", (
             _s(SMFEM, *grid("rod_impact", _r(1, 2, 4), (1, 2, 4))),
             _s(REF2D, *grid("rod_impact", _r(1, 2), (1, 2, 4)), {"refine": 4}),
             _s(REF3D, *grid("rod_impact", _r(1), THREE_D)),
+            _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 4}), truth=TruthPlan(TIME_TRUTH, refine=(2, 4))),
     )
 
@@ -142,6 +148,7 @@ def full() -> tuple[CaseStudy, ...]:
             _s(SMFEM, *grid("dome", _r(1, 2, 4, 8, 16), (1, 2, 4, 8, 16))),
             _s(REF2D, *grid("dome", _r(1, 2, 4, 8), (1, 2, 4, 8))),
             _s(REF3D, *grid("dome", _r(1), (1, 2, 4)), *grid("dome", _r(2), (1, 2, 4))),
+            _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 16}), truth=TruthPlan(MODAL_TRUTH, refine=(2, 4, 8))),
         CaseStudy("thick_cylinder", (
             _s(SMFEM, *grid("thick_cylinder", ({"harmonics": 20}, {"refine": 2, "harmonics": 40},
@@ -149,6 +156,7 @@ def full() -> tuple[CaseStudy, ...]:
                             (1, 2, 4, 8, 16, 32, 64))),
             _s(REF2D, *grid("thick_cylinder", _r(1, 2), (1, 2, 4, 8, 16, 32)), *grid("thick_cylinder", _r(3), (1, 4, 16))),
             _s(REF3D, *grid("thick_cylinder", _r(1), (1, 2, 4, 8)), *grid("thick_cylinder", _r(2), (1, 2, 4))),
+            _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 4}),
             truth=TruthPlan(MODAL_TRUTH, refine=(4, 8, 16), harmonics=(320, 640, 1280))),
         CaseStudy("notched_cylinder", (
@@ -157,6 +165,7 @@ def full() -> tuple[CaseStudy, ...]:
                             (1, 2, 4, 8))),
             _s(REF2D, *grid("notched_cylinder", _r(1), (1, 2, 4, 8)), *grid("notched_cylinder", _r(2), (1, 2, 4, 8))),
             _s(REF3D, *grid("notched_cylinder", _r(1), (0.5, 1, 2, 4))),
+            _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 3}),
             truth=TruthPlan(TIME_TRUTH, refine=(2, 3), dt_divisors=(1, 2, 4, 8))),
         CaseStudy("notched_strip", (
@@ -164,12 +173,14 @@ def full() -> tuple[CaseStudy, ...]:
                                               {"harmonics": 240}, {"harmonics": 400}), (1, 2, 4, 8))),
             _s(REF2D, *grid("notched_strip", _r(1), (1, 2, 4, 8)), *grid("notched_strip", _r(2), (1, 2, 4))),
             _s(REF3D, *grid("notched_strip", _r(1), (0.5, 1, 2, 4))),
+            _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 3}),
             truth=TruthPlan(TIME_TRUTH, refine=(2, 3), dt_divisors=(1, 2, 4, 8))),
         CaseStudy("rod_impact", (
             _s(SMFEM, *grid("rod_impact", _r(1, 2, 4, 8), (1, 2, 4, 8))),
             _s(REF2D, *grid("rod_impact", _r(1, 2, 4), (1, 2, 4, 8))),
             _s(REF3D, *grid("rod_impact", _r(1), (0.5, 1, 2, 4))),
+            _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 8}),
             truth=TruthPlan(TIME_TRUTH, refine=(4, 8), dt_divisors=(1, 2, 4, 8))),
     )

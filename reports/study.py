@@ -13,7 +13,7 @@ from cases import get_case
 from .cache import Run, RunCache
 from .executors import run_jobs
 from .jobs import Job
-from .plan import REF3D, SMFEM, CaseStudy
+from .plan import CALCULIX, REF3D, SMFEM, CaseStudy
 from .truth import Truth, assemble
 from .truth import jobs as truth_jobs
 
@@ -67,7 +67,7 @@ def _jobs(study: CaseStudy) -> tuple[dict, Job, Job, dict]:
 def _cost_order(job: Job) -> tuple:
     """Longest runs first, so that two workers finish together: 3-D, then finer meshes."""
     o = dict(job.overrides)
-    return (job.solver != REF3D, -o.get("refine", 1), -o.get("harmonics", 0))
+    return (job.solver not in (REF3D, CALCULIX), -o.get("refine", 1), -o.get("harmonics", 0))
 
 
 def run_cached(jobs: list[Job], cache: RunCache, scheduler: str | None = None, workers: int = 2,

@@ -9,7 +9,7 @@ import pandas as pd
 
 from . import metrics
 from .analysis import HEADLINE_MEASURE, CaseAnalysis
-from .jobs import OK
+from .jobs import NOT_INSTALLED, OK
 from .plan import SMFEM
 from .truth import PARTS
 
@@ -44,6 +44,8 @@ def headline_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
         mine = an.solvers.get(SMFEM)
         truth = an.truth.name if an.truth is not None else "none available"
         for solver, s in an.solvers.items():
+            if s.status == NOT_INSTALLED:  # named in the case's section, not a row
+                continue
             row = {"case": an.case.name, "solver": solver, "truth": truth,
                    "truth_uncertainty_pct": 100 * an.truth_uncertainty, "runs": len(s.points),
                    "best_error_pct": 100 * s.points.total.min() if s.status == OK and len(s.points) else math.nan}

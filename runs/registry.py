@@ -2,7 +2,8 @@
 
 The names are the ones the studies and ``summary.json`` use: ``smfem``, ``reference-2d``,
 ``reference-3d`` (the reference FEM with ``dim`` set), ``reference`` (the reference at the
-case's own ``dim``) and ``reference-modal`` (the reference's harmonic model, exact in time).
+case's own ``dim``), ``reference-modal`` (the reference's harmonic model, exact in time) and
+``calculix`` (CalculiX on the reference mesh, at the case's ``dim``; needs ``ccx`` on PATH).
 Each solver is imported only when it runs, so ``smfem run`` does not load the reference.
 """
 
@@ -14,7 +15,8 @@ from typing import Callable
 from cases.result import RunResult
 
 SMFEM, REFERENCE, REF2D, REF3D, MODAL = "smfem", "reference", "reference-2d", "reference-3d", "reference-modal"
-SOLVERS = (SMFEM, REFERENCE, REF2D, REF3D, MODAL)
+CALCULIX = "calculix"
+SOLVERS = (SMFEM, REFERENCE, REF2D, REF3D, MODAL, CALCULIX)
 #: the ``dim`` each reference name fixes
 DIMS = {REF2D: 2, REF3D: 3}
 
@@ -23,9 +25,9 @@ def with_dim(solver: str, case):
     """``case`` with the ``dim`` the solver name fixes (unchanged for the others)."""
     if solver not in DIMS or case.params.get("dim") == DIMS[solver]:
         return case
-    from cases import get_case
+    from cases import rebuild
 
-    return get_case(case.name, {**case.params, "dim": DIMS[solver]})
+    return rebuild(case, {"dim": DIMS[solver]})
 
 
 def solve(solver: str, case, progress: Callable[[int, int], None] | None = None,
@@ -45,6 +47,10 @@ def solve(solver: str, case, progress: Callable[[int, int], None] | None = None,
         from reference_fem.modal import solve as modal
 
         return modal(case, progress=progress)
+    if solver == CALCULIX:
+        from reference_fem.calculix import solve as calculix
+
+        return calculix(case, progress=progress)
     from reference_fem import solve as reference
 
     result = reference(case, progress=progress, every=every)

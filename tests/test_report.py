@@ -15,8 +15,9 @@ from reports import metrics
 from reports.analysis import analyse
 from reports.build import build
 from reports.cache import Run, RunCache
-from reports.jobs import NOT_AVAILABLE, Job, execute
-from reports.plan import MODAL_TRUTH, REF2D, REF3D, SMFEM, CaseStudy, Series, TruthPlan, grid, quick
+from reports.cache import RunCache
+from reports.jobs import NOT_AVAILABLE, NOT_INSTALLED, Job, execute
+from reports.plan import CALCULIX, MODAL_TRUTH, REF2D, REF3D, SMFEM, CaseStudy, Series, TruthPlan, grid, quick
 from reports.references import rod_histories
 from reports.study import CaseRuns
 from reports.tables import headline_table
@@ -29,6 +30,7 @@ TINY = (
         Series(SMFEM, grid("dome", ({"refine": 1}, {"refine": 2}, {"refine": 3}), (1, 2, 4))),
         Series(REF2D, grid("dome", ({"refine": 1}, {"refine": 2}), (1, 2))),
         Series(REF3D, ({"refine": 1},)),
+        Series(CALCULIX, ({},)),
     ), reference=(REF2D, {"refine": 4}), truth=TruthPlan(MODAL_TRUTH, refine=(1, 2, 4)), base={"t_end": 4e-5}),
     CaseStudy("thick_cylinder", (
         Series(SMFEM, grid("thick_cylinder", ({"harmonics": 4}, {"harmonics": 10}, {"refine": 2, "harmonics": 20}),
@@ -296,3 +298,20 @@ def test_the_3d_view_renders_without_library_noise(tmp_path):
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "box.png").stat().st_size > 1000
     assert "X server" not in done.stderr and "WARN" not in done.stderr, done.stderr
+
+
+def test_the_calculix_row_is_there_with_ccx_and_left_out_without(tiny, tmp_path, monkeypatch):
+    head = pd.read_csv(tiny.out / "tables" / "headline.csv")
+    html = (tiny.out / "index.html").read_text()
+    if shutil.which("ccx"):
+        row = head[(head.case == "dome") & (head.solver == CALCULIX)]
+        assert len(row) == 1 and row.best_error_pct.iloc[0] < 50
+    else:
+        assert CALCULIX not in set(head.solver) and "ccx is not installed" in html
+    monkeypatch.setenv("SMFEM_CCX", "no-such-ccx-here")
+    job = Job.make("dome", CALCULIX, {"t_end": 4e-5})
+    outcome = execute(job)
+    assert outcome.status == NOT_INSTALLED and "ccx is not installed" in outcome.message
+    cache = RunCache(tmp_path / "runs")
+    cache.store(job, outcome)
+    assert cache.load(job) is None  # tried again once ccx is there

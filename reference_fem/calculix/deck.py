@@ -1,0 +1,247 @@
+"""A case as an Abaqus/CalculiX input deck (``.inp``) on the reference FEM's mesh.
+
+The mesh's quadratic Lagrange elements lose their face and centre nodes and become serendipity
+elements: CPE8 (plane strain), CAX8 (axisymmetric; x = r, y = z) or C3D20. Everything else is
+the case's: the elastic material, von Mises plasticity as a table (ideal, or linear isotropic
+hardening), the pressures as element-face loads under a step amplitude (on at t = 0), the
+reference's supports (so the same dofs are fixed), the initial velocity, implicit dynamics (fixed
+increments of dt where linear; see :func:`fixed_increments`) and Newmark's average acceleration (``ALPHA = 0``: beta = 1/4, gamma = 1/2, the
+case's convention) and output at every increment. A rigid wall is a unilateral gap element
+(GAPUNI) from each node of the struck face to a fixed ground node.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cases.geometry import RING
+from cases.params import UnsupportedCase
+
+from ..face import plane_face
+from ..frames import AXISYMMETRIC, SOLID, body_point_to_mesh
+from ..mesh import vtk_cells
+from ..model import Model
+
+#: corner nodes (0-based, in the element's order) of each face P1 ... of CPE8/CAX8 and C3D20
+FACES = {
+    2: ((0, 1), (1, 2), (2, 3), (3, 0)),
+    3: ((0, 1, 2, 3), (4, 7, 6, 5), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)),
+}
+#: smallest increment ccx may cut back to, as a fraction of dt (plastic and contact runs)
+MIN_INCREMENT = 1e-4
+PER_LINE = 8  # numbers per data line (Abaqus allows 16; short lines read better)
+
+
+@dataclass
+class Deck:
+    """An input deck and what reading its results needs.
+
+    Attributes
+    ----------
+    text : the ``.inp`` file
+    element : ``'CPE8'``, ``'CAX8'`` or ``'C3D20'``
+    points : mesh-frame coordinates of every node of the reference mesh, ``(dim, n)``; node
+        ``k`` of the deck is ``k + 1`` (the Lagrange face and centre nodes are left out)
+    cells : the reference mesh's cells (VTK quad9 / hexahedron27 order), ``(n_elements, 9 | 27)``
+    probe_nodes : probe name -> deck node at the probe point (point probes only)
+    wall_nodes : deck nodes of the fixed wall layer (their reactions are the contact force)
+    model : the reference model the deck was made from (supports, mass, faces)
+    """
+
+    text: str
+    element: str
+    points: np.ndarray
+    cells: np.ndarray
+    probe_nodes: dict = field(default_factory=dict)
+    wall_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    model: Model | None = None
+
+    @property
+    def corner_count(self) -> int:
+        return 8 if self.points.shape[0] == 2 else 20
+
+
+def build_deck(case) -> Deck:
+    """The deck of ``case`` at its parameters (``dim`` 2 or 3, ``refine``, ``dt``, ``t_end``)."""
+    if case.wall is not None and case.wall.slope:
+        raise UnsupportedCase("calculix: a tilted wall (wall_slope > 0) is not exported; use wall_slope=0")
+    if case.wall is not None and case.material.plastic:
+        raise UnsupportedCase("calculix: contact with plasticity is not exported (as in the reference FEM)")
+    model = Model(case)
+    mesh, rep, dim = model.rmesh.mesh, model.rep, model.dim
+    _, cells = vtk_cells(mesh)
+    n_corner = 8 if dim == 2 else 20
+    element = "C3D20" if rep == SOLID else ("CAX8" if rep == AXISYMMETRIC else "CPE8")
+    used = np.unique(cells[:, :n_corner])
+    points = np.asarray(mesh.p, float)
+    points = np.where(np.abs(points) < 1e-12 * np.abs(points).max(), 0.0, points)  # ccx misreads 1e-16
+    out = [
+        f"** {case.title}",
+        f"** written by smfem export from case {case.name!r} with {_params(case)}",
+        f"** units: {case.units}; element {element} on the reference FEM's mesh "
+        f"({mesh.nelements} elements, refine {case.refine})",
+        "*HEADING",
+        f"smfem case {case.name}",
+        "*NODE, NSET=NALL",
+        *(_row([k + 1, *(_number(x) for x in points[:, k])]) for k in used),
+        f"*ELEMENT, TYPE={element}, ELSET=EALL",
+        *(_row([e + 1, *(cells[e, :n_corner] + 1)]) for e in range(mesh.nelements)),
+    ]
+    wall_nodes = np.zeros(0, int)
+    if case.wall is not None:
+        wall_lines, wall_nodes = _wall(model, points, cells, n_corner, element)
+        out += wall_lines
+    out += _material(case)
+    thickness = "" if dim == 3 else "\n1."  # plane strain: per unit thickness; axisymmetric: ignored
+    out += [f"*SOLID SECTION, ELSET=EALL, MATERIAL=MAT{thickness}"]
+    out += _supports(model, used)
+    out += _initial_velocity(case, model, used)
+    probe_nodes = _probe_nodes(case, model, points, used)
+    if probe_nodes:
+        out += ["*NSET, NSET=PROBES", *_rows(sorted(set(probe_nodes.values())))]
+    out += [f"*AMPLITUDE, NAME=STEPLOAD", f"0., 1., {case.t_end:.13g}, 1."]
+    if fixed_increments(case):
+        out += [f"*STEP, INC={case.n_steps + 10}", "*DYNAMIC, DIRECT, ALPHA=0.", f"{case.dt:.13g}, {case.t_end:.13g}"]
+    else:  # ccx's own increments, at most dt, cut back where its Newton does not converge
+        out += [f"*STEP, INC={100 * case.n_steps}", "*DYNAMIC, ALPHA=0.",
+                f"{case.dt:.13g}, {case.t_end:.13g}, {case.dt * MIN_INCREMENT:.13g}, {case.dt:.13g}"]
+    out += _pressures(case, model, cells, dim)
+    node_out = "U, V" + (", RF" if case.wall is not None else "")
+    el_out = "S" + (", PEEQ" if case.material.plastic else "")
+    two_d = "" if dim == 3 else ", OUTPUT=2D"
+    out += [f"*NODE FILE{two_d}", node_out, f"*EL FILE{two_d}", el_out]
+    if probe_nodes:
+        out += ["*NODE PRINT, NSET=PROBES", "U"]
+    out += ["*END STEP", ""]
+    return Deck("\n".join(out), element, points, cells, probe_nodes, wall_nodes, model)
+
+
+def fixed_increments(case) -> bool:
+    """Linear runs march at the case's dt exactly. With plasticity or contact ccx's Newton
+    fails at dt in the first steps of these shock loads (the thick cylinder at nu = 0 in its
+    first increment; the rod at its second): there it chooses its increments, at most dt."""
+    return not case.material.plastic
+
+
+def _params(case) -> str:
+    return ", ".join(f"{k}={v}" for k, v in case.params.items())
+
+
+def _number(x: float) -> str:
+    """A coordinate in at most 19 characters (CalculiX reads longer numbers wrong)."""
+    return f"{x:.13g}"
+
+
+def _row(values) -> str:
+    """One data line; longer ones continue on the next (a line ending in a comma)."""
+    text = [str(v) for v in values]
+    chunks = [", ".join(text[i : i + 16]) for i in range(0, len(text), 16)]
+    return ",\n".join(chunks)
+
+
+def _rows(values) -> list[str]:
+    values = [str(v) for v in values]
+    return [", ".join(values[i : i + PER_LINE]) + "," for i in range(0, len(values), PER_LINE)]
+
+
+def _material(case) -> list[str]:
+    mat = case.material
+    lines = ["*MATERIAL, NAME=MAT", "*ELASTIC", f"{mat.E:.13g}, {mat.nu:.13g}", "*DENSITY", f"{mat.rho:.13g}"]
+    if mat.plastic:
+        # von Mises, isotropic hardening: sigma_y(eps_p) = sigma_y0 + H eps_p, as a table
+        lines += ["*PLASTIC", f"{mat.sigma_y:.13g}, 0."]
+        if mat.E_T:
+            lines.append(f"{mat.sigma_y + mat.hardening_modulus:.13g}, 1.")
+    return lines
+
+
+def _supports(model: Model, used: np.ndarray) -> list[str]:
+    """The reference's fixed dofs (supports, diaphragm ends, the axis) as ``*BOUNDARY`` lines."""
+    node, comp = np.divmod(model.fixed, model.dim)
+    keep = np.isin(node, used)
+    if not keep.any():
+        return []
+    return ["*BOUNDARY", *(f"{n + 1}, {c + 1}, {c + 1}" for n, c in zip(node[keep], comp[keep]))]
+
+
+def _initial_velocity(case, model: Model, used: np.ndarray) -> list[str]:
+    if not case.initial_velocity:
+        return []
+    v = model.initial_velocity().reshape(-1, model.dim)
+    lines = ["*INITIAL CONDITIONS, TYPE=VELOCITY"]
+    for n in used:
+        lines += [f"{n + 1}, {c + 1}, {v[n, c]:.13g}" for c in range(model.dim) if v[n, c] != 0.0]
+    return lines
+
+
+def _probe_nodes(case, model: Model, points: np.ndarray, used: np.ndarray) -> dict:
+    """The deck node at each point probe. CalculiX reports at nodes, so a probe must sit on
+    one (to 1e-4 of the body's size: the printed peps_A radius 1.0333 is the node at 1 + 1/30);
+    a probe between nodes is refused, not interpolated."""
+    size = np.abs(points).max()
+    nodes = {}
+    for probe in case.probes:
+        if probe.kind != "point":
+            continue
+        x = body_point_to_mesh(case, model.rep, probe.point)
+        d = np.linalg.norm(points[:, used] - x[:, None], axis=0)
+        k = int(np.argmin(d))
+        if d[k] > 1e-4 * size:
+            raise UnsupportedCase(f"calculix: probe {probe.name!r} at {probe.point} is not on a node of the "
+                                  f"mesh (nearest {d[k]:.3g} away)")
+        nodes[probe.name] = int(used[k]) + 1
+    return nodes
+
+
+def _element_faces(model: Model, cells: np.ndarray, facets: np.ndarray, dim: int) -> list[tuple[int, int]]:
+    """``(element, face number 1...)`` of boundary ``facets``."""
+    mesh = model.rmesh.mesh
+    out = []
+    for f in facets:
+        e = int(mesh.f2t[0, f])
+        corners = set(mesh.facets[:, f].tolist())
+        for k, face in enumerate(FACES[dim]):
+            if {int(cells[e, i]) for i in face} == corners:
+                out.append((e, k + 1))
+                break
+        else:
+            raise AssertionError(f"facet {f} is no face of element {e}")
+    return out
+
+
+def _pressures(case, model: Model, cells: np.ndarray, dim: int) -> list[str]:
+    lines = []
+    for load in case.loads:
+        if load.mode is not None:
+            raise UnsupportedCase("calculix: a single-harmonic load (mode) is not exported")
+        lines += ["*DLOAD, AMPLITUDE=STEPLOAD"]
+        lines += [f"{e + 1}, P{k}, {load.q:.13g}" for e, k in _element_faces(model, cells, model.load_facets(load), dim)]
+    return lines
+
+
+def _wall(model: Model, points, cells, n_corner: int, element: str) -> tuple[list[str], np.ndarray]:
+    """A rigid wall (2D): a unilateral gap element (GAPUNI) from each node of the struck face to
+    a fixed ground node there, closing at the case's gap along the face's outward normal, with a
+    penalty stiffness of 1000 E times the face's width (penetration ~1e-7 of the rod's motion).
+    (ccx's node-to-surface and surface-to-surface contact with a fixed wall of elements did not
+    converge past the first microsecond of the rod's impact, even with cut-backs.)"""
+    case = model.case
+    if model.dim != 2:
+        raise UnsupportedCase("calculix: the rigid wall is exported in 2D only (dim=2)")
+    normal = np.asarray(plane_face(model, case.wall.edge).normal, float)[:2]  # outward, towards the wall
+    faces = _element_faces(model, cells, model.edge_facets(case.wall.edge), 2)
+    struck = np.unique([int(cells[e, i]) for e, k in faces for i in (*FACES[2][k - 1], 4 + k - 1)])
+    first = points.shape[1] + 1  # ground nodes are numbered after the body's
+    ground = np.arange(first, first + struck.size)
+    width = np.ptp(points[:, struck], axis=1).max()
+    stiffness = 1000.0 * case.material.E * width
+    lines = ["*NODE, NSET=GROUND", *(_row([g, *(_number(x) for x in points[:, n])]) for g, n in zip(ground, struck))]
+    start = model.rmesh.mesh.nelements + 1
+    lines += ["*ELEMENT, TYPE=GAPUNI, ELSET=WALLGAPS",
+              *(f"{start + j}, {n + 1}, {g}" for j, (n, g) in enumerate(zip(struck, ground)))]
+    lines += ["*GAP, ELSET=WALLGAPS", f"{_number(case.wall.gap)}, {_number(-normal[0])}, {_number(-normal[1])}, 0., , "
+              f"{_number(stiffness)}"]
+    lines += ["*BOUNDARY", *(f"{g}, 1, 3" for g in ground)]
+    return lines, ground

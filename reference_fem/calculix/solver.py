@@ -1,0 +1,232 @@
+"""``ccx`` on a case's deck, its results as a :class:`~cases.result.RunResult`.
+
+Probes: ``'point'`` probes read the node at the probe point (the deck refuses a probe between
+nodes); stresses and PEEQ are CalculiX's nodal values (extrapolated from its integration
+points and averaged over the elements at the node). ``'max'`` of ``'peps'`` is the largest
+nodal PEEQ. ``'body_mean'`` is mass-weighted with the reference mesh's consistent mass (the
+serendipity field completed at the Lagrange face and centre nodes). ``'edge_mean'`` of the
+normal stress on the struck face is the wall's reaction over the face area.
+
+CalculiX's PEEQ is the *accumulated* equivalent plastic strain; the cases' ``peps`` is
+sqrt(2/3 eps_p : eps_p) of the current plastic strain. They agree while the plastic flow keeps
+its direction; ``info['peps']`` says which one a run reports.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import resource
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from cases.params import ToolMissing, UnsupportedCase
+from cases.result import RunResult
+
+from ..face import plane_face
+from ..frames import AXISYMMETRIC, body_point_to_mesh, body_rotation
+from .deck import Deck, build_deck, fixed_increments
+from .frd import read_frd, read_sta
+
+CCX = "ccx"
+PEEQ_NOTE = ("PEEQ: CalculiX's accumulated equivalent plastic strain, nodal (extrapolated from the integration "
+             "points), not the case's sqrt(2/3 eps_p:eps_p); equal while the flow keeps its direction")
+#: the C3D20 mid-side nodes (in the VTK hexahedron's order 8 ... 19) and the faces' nodes
+HEX_EDGES = ((0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7))
+HEX_FACES = ((0, 3, 7, 4), (1, 2, 6, 5), (0, 1, 5, 4), (3, 2, 6, 7), (0, 1, 2, 3), (4, 5, 6, 7))
+
+
+class CalculixMissing(ToolMissing):
+    """``ccx`` is not on PATH (a clear one-line message, exit 2)."""
+
+
+class CalculixFailed(RuntimeError):
+    """``ccx`` ran but did not finish the step (its last message is in the text)."""
+
+
+def find_ccx() -> str:
+    """The ``ccx`` executable, or :class:`CalculixMissing`."""
+    found = shutil.which(os.environ.get("SMFEM_CCX", CCX))
+    if not found:
+        raise CalculixMissing("calculix: ccx is not installed (Debian/Ubuntu: apt-get install calculix-ccx), "
+                              "or set SMFEM_CCX to its path")
+    return found
+
+
+def solve(case, progress: Callable[[int, int], None] | None = None,
+          workdir: Path | None = None) -> RunResult:
+    """Run ``case`` in CalculiX (the reference mesh, the case's dt and window, one thread).
+
+    ``cpu_time_s`` is ccx's own CPU time (its model, factorizations and increments), as the
+    other solvers count theirs; making the deck and reading the results are not in it.
+    ``workdir`` keeps ccx's files there (else a temporary directory).
+    """
+    ccx = find_ccx()
+    deck = build_deck(case)
+    with tempfile.TemporaryDirectory(prefix="smfem-ccx-") as tmp:
+        work = Path(workdir or tmp)
+        work.mkdir(parents=True, exist_ok=True)
+        (work / "job.inp").write_text(deck.text)
+        cpu, log = _run(ccx, work, case.n_steps, progress)
+        result = read_results(case, deck, work, log)
+    result.cpu_time_s = cpu
+    result.info["ccx"] = ccx
+    return result
+
+
+def read_results(case, deck: Deck, work: Path, log: str = "") -> RunResult:
+    """The run in ``work`` (``job.frd``, ``job.sta``) as a :class:`RunResult` on the case's
+    time grid (``cpu_time_s`` left 0)."""
+    if not (work / "job.frd").exists():
+        raise CalculixFailed(f"calculix: ccx wrote no results: {_last_error(log)}")
+    blocks = read_frd(work / "job.frd", {"DISP", "VELO", "STRESS", "PE", "FORC"})
+    increments = read_sta(work / "job.sta") if (work / "job.sta").exists() else []
+    # the increments every result block has (a failed run's last one may be cut short)
+    n_inc = min(len(b) for b in blocks.values()) if blocks else 0
+    ccx_t = np.array([0.0] + [blocks["DISP"][k][0] for k in range(n_inc)])
+    fields_at = _Fields(deck, case, {name: [b[1:] for b in bs[:n_inc]] for name, bs in blocks.items()})
+    ccx_history = {p.name: np.array([fields_at.initial(p)] + [fields_at.value(p, k) for k in range(n_inc)])
+                   for p in case.probes}
+    # onto the case's time grid (ccx's own increments, with plasticity, are not on it)
+    grid = np.arange(case.n_steps + 1) * case.dt
+    n_done = int(np.searchsorted(grid, ccx_t[-1] * (1 + 1e-9), side="right")) - 1
+    t = grid[: n_done + 1]
+    history = {k: np.interp(t, ccx_t, v) for k, v in ccx_history.items()}
+    its = np.array([i for _, i in increments], int)
+    ends = np.searchsorted(np.array([ti for ti, _ in increments]), t[1:] * (1 + 1e-9), side="right")
+    iterations = np.diff(np.concatenate([[0], np.cumsum(its)[ends - 1] if its.size else np.zeros(n_done, int)]))
+    converged = n_done == case.n_steps
+    message = "" if converged else (f"calculix: stopped at t = {ccx_t[-1]:.6g} s, step {n_done} of {case.n_steps}: "
+                                    f"{_last_error(log)}")
+    info = {"element": deck.element, "n_elements": int(deck.cells.shape[0]),
+            "dim": int(deck.points.shape[0]), "representation": deck.model.rep, "increments": n_inc,
+            "time_step": "dt" if fixed_increments(case) else "ccx's own, at most dt, interpolated onto the dt grid"}
+    if case.material.plastic:
+        info["peps"] = PEEQ_NOTE
+    n_nodes = len(np.unique(deck.cells[:, : deck.corner_count]))
+    return RunResult(t=t, history=history, n_dof=n_nodes * deck.points.shape[0], iterations=[int(i) for i in iterations],
+                     converged=bool(converged), message=message, info=info)
+
+
+def _run(ccx: str, work: Path, n_steps: int, progress) -> tuple[float, str]:
+    """Run ccx on ``work/job.inp``; its CPU time and its output."""
+    env = dict(os.environ, OMP_NUM_THREADS="1", CCX_NPROC_STIFFNESS="1", CCX_NPROC_EQUATION_SOLVER="1")
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    out = []
+    with subprocess.Popen([ccx, "-i", "job"], cwd=work, env=env, stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, text=True) as proc:
+        for line in proc.stdout:
+            out.append(line)
+            m = re.match(r"\s*increment\s+(\d+)\s+attempt", line)
+            if m and progress:
+                progress(min(int(m.group(1)), n_steps), n_steps)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return cpu, "".join(out)
+
+
+def _last_error(log: str) -> str:
+    errors = [line.strip() for line in log.splitlines() if "ERROR" in line]
+    return errors[-1] if errors else (log.strip().splitlines() or ["no output"])[-1]
+
+
+class _Fields:
+    """The case's probes from ccx's nodal results, increment by increment."""
+
+    def __init__(self, deck: Deck, case, blocks: dict):
+        self.deck, self.case, self.blocks = deck, case, blocks
+        self.dim = deck.points.shape[0]
+        self.n_nodes = deck.points.shape[1]
+        self._mass_rows = {}
+
+    def nodal(self, name: str, k: int, width: int) -> np.ndarray:
+        """Result ``name`` of increment ``k`` at every node of the reference mesh (0 where ccx has none)."""
+        nodes, values = self.blocks[name][k]
+        out = np.zeros((self.n_nodes, width))
+        inside = nodes <= self.n_nodes
+        out[nodes[inside] - 1] = values[inside, :width]
+        return out
+
+    def initial(self, probe) -> float:
+        if probe.field == "v" and probe.kind == "body_mean":
+            v0 = self.deck.model.initial_velocity().reshape(-1, self.dim)
+            return self._body_mean(probe, v0)
+        if probe.field == "v":
+            return self._rotate_vector(probe, self.deck.model.initial_velocity().reshape(-1, self.dim))
+        return 0.0
+
+    def value(self, probe, k: int) -> float:
+        case = self.case
+        if probe.kind == "max" and probe.field == "peps":
+            return float(self.nodal("PE", k, 1).max())
+        if probe.kind == "point" and probe.field in ("u", "v"):
+            return self._rotate_vector(probe, self.nodal("DISP" if probe.field == "u" else "VELO", k, 3))
+        if probe.kind == "point" and probe.field == "peps":
+            return float(self.nodal("PE", k, 1)[self.deck.probe_nodes[probe.name] - 1, 0])
+        if probe.kind == "point" and probe.field == "sigma" and "n" not in probe.component:
+            s = self.nodal("STRESS", k, 6)[self.deck.probe_nodes[probe.name] - 1]
+            T = np.array([[s[0], s[3], s[5]], [s[3], s[1], s[4]], [s[5], s[4], s[2]]])
+            R = self._rotation(probe)
+            i, j = (c - 1 for c in probe.component)
+            return float((R @ T @ R.T)[i, j])
+        if probe.kind == "body_mean" and probe.field in ("u", "v"):
+            x = self.nodal("DISP" if probe.field == "u" else "VELO", k, 3)[:, : self.dim]
+            return self._body_mean(probe, x)
+        if probe.kind == "edge_mean" and tuple(probe.component) == ("n", "n") and case.wall is not None \
+                and probe.edge == case.wall.edge:
+            return self._wall_stress(k)
+        raise UnsupportedCase(f"calculix: probe {probe.name!r} ({probe.kind} of {probe.field}) is not available")
+
+    def _rotation(self, probe) -> np.ndarray:
+        x = body_point_to_mesh(self.case, self.deck.model.rep, probe.point)
+        return body_rotation(self.case, self.deck.model.rep, x[:, None])[0]
+
+    def _rotate_vector(self, probe, nodal: np.ndarray) -> float:
+        u = np.zeros(3)
+        u[: self.dim] = nodal[self.deck.probe_nodes[probe.name] - 1, : self.dim]
+        return float((self._rotation(probe) @ u)[probe.component[0] - 1])
+
+    def _body_mean(self, probe, nodal: np.ndarray) -> float:
+        """Mass-weighted mean of a body component (consistent mass of the completed field)."""
+        model = self.deck.model
+        if probe.component not in self._mass_rows:
+            R = body_rotation(self.case, model.rep, model.rmesh.mesh.doflocs)
+            e = R[:, probe.component[0] - 1, : self.dim].ravel()
+            self._mass_rows[probe.component] = (e @ model.M) / (model.M @ np.ones(model.basis.N))[:: self.dim].sum()
+        full = complete(self.deck.cells, nodal[:, : self.dim].copy(), self.dim)
+        return float(self._mass_rows[probe.component] @ full.ravel())
+
+    def _wall_stress(self, k: int) -> float:
+        """Mean normal stress on the struck face: the wall's reaction along the face normal over
+        the face area (axisymmetric: ccx's reactions are for the whole circumference, the
+        reference's area per radian)."""
+        nodes, f = self.blocks["FORC"][k]
+        wall = np.isin(nodes, self.deck.wall_nodes)
+        face = plane_face(self.deck.model, self.case.wall.edge)
+        normal = np.asarray(face.normal, float)[: self.dim]
+        total = float((f[wall, : self.dim] @ normal).sum())
+        per = 2 * np.pi if self.deck.model.rep == AXISYMMETRIC else 1.0
+        return total / per / face.area
+
+
+def complete(cells: np.ndarray, nodal: np.ndarray, dim: int) -> np.ndarray:
+    """``nodal`` values of a serendipity field (corner and mid-side nodes) with the Lagrange
+    face and centre nodes of ``cells`` (VTK quad9 / hexahedron27) filled in: the serendipity
+    interpolation there (-1/4 of the corners plus 1/2 of the mid-sides on a face or 2D centre;
+    -1/4 of the corners plus 1/4 of the mid-sides at a hexahedron's centre)."""
+    if dim == 2:
+        nodal[cells[:, 8]] = -0.25 * nodal[cells[:, :4]].sum(axis=1) + 0.5 * nodal[cells[:, 4:8]].sum(axis=1)
+        return nodal
+    edge_of = {frozenset(e): 8 + k for k, e in enumerate(HEX_EDGES)}
+    for f, face in enumerate(HEX_FACES):
+        mids = [edge_of[frozenset((face[i], face[(i + 1) % 4]))] for i in range(4)]
+        nodal[cells[:, 20 + f]] = (-0.25 * nodal[cells[:, list(face)]].sum(axis=1)
+                                   + 0.5 * nodal[cells[:, mids]].sum(axis=1))
+    nodal[cells[:, 26]] = -0.25 * nodal[cells[:, :8]].sum(axis=1) + 0.25 * nodal[cells[:, 8:20]].sum(axis=1)
+    return nodal
