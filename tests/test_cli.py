@@ -97,6 +97,12 @@ def test_every_n_steps_writes_a_paraview_time_series(solver, tmp_path):
     sets = ET.parse(out / "fields.pvd").getroot().find("Collection").findall("DataSet")
     times = [float(d.get("timestep")) for d in sets]
     assert times == pytest.approx([0.0, 1.6e-5, 3.2e-5])
+    import pyvista
+
+    reader = pyvista.get_reader(str(out / "fields.pvd"))  # as ParaView opens it
+    assert reader.number_time_points == 3 and reader.time_values == pytest.approx(times)
+    reader.set_active_time_value(reader.time_values[-1])
+    assert "displacement" in reader.read()[0].point_data
     frames = [meshio.read(out / d.get("file")) for d in sets]
     assert all({"displacement", "velocity"} <= set(f.point_data) and {"stress", "peps"} <= set(f.cell_data) for f in frames)
     assert all(np.isfinite(f.cell_data["stress"][0]).all() for f in frames)
