@@ -60,7 +60,8 @@ def test_tiny_report_has_a_figure_per_case_the_headline_and_the_tables(tiny):
     for name in ("headline", "truth", "spatial", "runs", "errors", "orders", "published"):
         assert (out / "tables" / f"{name}.csv").exists()
     head = pd.read_csv(out / "tables" / "headline.csv")
-    assert len(head) == 5 and set(head.case) == {"dome", "thick_cylinder"}
+    # dome: smfem, 2D, 3D and (where ccx is installed) calculix; thick cylinder: smfem, 2D
+    assert len(head) == (6 if shutil.which("ccx") else 5) and set(head.case) == {"dome", "thick_cylinder"}
     assert head.truth.str.startswith("reference-modal: harmonic model").all()
     dome = head[head.case == "dome"].set_index("solver")
     assert dome.loc[SMFEM, "best_error_pct"] < 5
@@ -98,8 +99,11 @@ def test_the_headline_is_the_cheapest_run_within_each_target_of_the_truth(tiny):
 def test_every_case_of_the_quick_report_has_a_truth():
     assert all(study.truth is not None for study in quick())
     for study in quick():
-        dts = {s.solver: {level.get("dt") for level in s.levels} for s in study.series}
-        assert all(len(d) >= 3 for d in dts.values()), (study.case, dts)  # three time steps per solver
+        # three time steps per solver; CalculiX is one point at the case's settings (its runs cost
+        # 100 times the reference's on the same mesh)
+        dts = {s.solver: {level.get("dt") for level in s.levels} for s in study.series if s.solver != CALCULIX}
+        assert all(len(d) >= 3 for d in dts.values()), (study.case, dts)
+        assert [s.levels for s in study.series if s.solver == CALCULIX] == [({},)]
 
 
 def test_dome_orders_and_published_extrema_are_tabulated(tiny):

@@ -7,7 +7,8 @@ hardening), the pressures as element-face loads under a step amplitude (on at t 
 reference's supports (so the same dofs are fixed), the initial velocity, implicit dynamics (fixed
 increments of dt where linear; see :func:`fixed_increments`) and Newmark's average acceleration (``ALPHA = 0``: beta = 1/4, gamma = 1/2, the
 case's convention) and output at every increment. A rigid wall is a unilateral gap element
-(GAPUNI) from each node of the struck face to a fixed ground node.
+(GAPUNI) from each node of the struck face to a fixed ground node, with the spring of the
+case's contact layer (exported for the user; :mod:`.solver` does not solve wall scenes).
 """
 
 from __future__ import annotations
@@ -46,7 +47,6 @@ class Deck:
         ``k`` of the deck is ``k + 1`` (the Lagrange face and centre nodes are left out)
     cells : the reference mesh's cells (VTK quad9 / hexahedron27 order), ``(n_elements, 9 | 27)``
     probe_nodes : probe name -> deck node at the probe point (point probes only)
-    wall_nodes : deck nodes of the fixed wall layer (their reactions are the contact force)
     model : the reference model the deck was made from (supports, mass, faces)
     """
 
@@ -55,7 +55,6 @@ class Deck:
     points: np.ndarray
     cells: np.ndarray
     probe_nodes: dict = field(default_factory=dict)
-    wall_nodes: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     model: Model | None = None
 
     @property
@@ -89,10 +88,8 @@ def build_deck(case) -> Deck:
         f"*ELEMENT, TYPE={element}, ELSET=EALL",
         *(_row([e + 1, *(cells[e, :n_corner] + 1)]) for e in range(mesh.nelements)),
     ]
-    wall_nodes = np.zeros(0, int)
     if case.wall is not None:
-        wall_lines, wall_nodes = _wall(model, points, cells, n_corner, element)
-        out += wall_lines
+        out += _wall(model, points, cells, element)
     out += _material(case)
     thickness = "" if dim == 3 else "\n1."  # plane strain: per unit thickness; axisymmetric: ignored
     out += [f"*SOLID SECTION, ELSET=EALL, MATERIAL=MAT{thickness}"]
@@ -115,7 +112,7 @@ def build_deck(case) -> Deck:
     if probe_nodes:
         out += ["*NODE PRINT, NSET=PROBES", "U"]
     out += ["*END STEP", ""]
-    return Deck("\n".join(out), element, points, cells, probe_nodes, wall_nodes, model)
+    return Deck("\n".join(out), element, points, cells, probe_nodes, model)
 
 
 def fixed_increments(case) -> bool:
@@ -167,10 +164,19 @@ def _supports(model: Model, used: np.ndarray) -> list[str]:
 
 
 def _initial_velocity(case, model: Model, used: np.ndarray) -> list[str]:
+    """The initial velocity at every node. CalculiX 2.20 does not carry the initial velocity of a
+    2D (CPE8/CAX8) node over to the nodes of the element's 3D expansion (later versions map it in
+    gen3dtemp.f): the body would start at rest. A massless point-mass element at each 2D node makes
+    ccx tie the expansion to that node (gen3dconnect.f), which then governs and keeps its velocity."""
     if not case.initial_velocity:
         return []
     v = model.initial_velocity().reshape(-1, model.dim)
-    lines = ["*INITIAL CONDITIONS, TYPE=VELOCITY"]
+    lines = []
+    if model.dim == 2:
+        first = model.rmesh.mesh.nelements + v.shape[0] + 1  # after the body's and any wall's elements
+        lines += ["*ELEMENT, TYPE=MASS, ELSET=CARRIERS", *(f"{first + j}, {n + 1}" for j, n in enumerate(used)),
+                  "*MASS, ELSET=CARRIERS", "0."]
+    lines += ["*INITIAL CONDITIONS, TYPE=VELOCITY"]
     for n in used:
         lines += [f"{n + 1}, {c + 1}, {v[n, c]:.13g}" for c in range(model.dim) if v[n, c] != 0.0]
     return lines
@@ -221,27 +227,60 @@ def _pressures(case, model: Model, cells: np.ndarray, dim: int) -> list[str]:
     return lines
 
 
-def _wall(model: Model, points, cells, n_corner: int, element: str) -> tuple[list[str], np.ndarray]:
-    """A rigid wall (2D): a unilateral gap element (GAPUNI) from each node of the struck face to
-    a fixed ground node there, closing at the case's gap along the face's outward normal, with a
-    penalty stiffness of 1000 E times the face's width (penetration ~1e-7 of the rod's motion).
-    (ccx's node-to-surface and surface-to-surface contact with a fixed wall of elements did not
-    converge past the first microsecond of the rod's impact, even with cut-backs.)"""
+def _wall(model: Model, points, cells, element: str) -> list[str]:
+    """A rigid wall (2D): a unilateral gap element (GAPUNI) from each node of the struck face to a
+    fixed ground node there, closing at the case's gap along the face's outward normal. Its spring
+    is the case's thin contact layer (Young's modulus ``layer_stiffness * E``, thickness
+    ``layer_thickness``): slope E_layer / t_layer per unit area times the node's share of the face
+    (row-scaled diagonal lumping of the face's r-weighted area: positive for every node of a
+    quadratic face, the axis node included).
+
+    CalculiX 2.20 on a 2D node (its 3D expansion: 2 degrees of the circumference, or the unit
+    thickness) passes half a GAPUNI's spring to the body: the force on the body is k d / 2 for
+    that segment (checked statically against a pressure load: 90 k d for the whole circumference),
+    while the ground node reports k d. So k = 2 * (the segment's stiffness).
+
+    This wall is exported, not solved (``solver.WALL_REFUSED``): against the face's consistent
+    mass the springs chatter at the rod's time step."""
     case = model.case
     if model.dim != 2:
         raise UnsupportedCase("calculix: the rigid wall is exported in 2D only (dim=2)")
     normal = np.asarray(plane_face(model, case.wall.edge).normal, float)[:2]  # outward, towards the wall
     faces = _element_faces(model, cells, model.edge_facets(case.wall.edge), 2)
-    struck = np.unique([int(cells[e, i]) for e, k in faces for i in (*FACES[2][k - 1], 4 + k - 1)])
+    area = _lumped_face_area(points, cells, faces, axisymmetric=element == "CAX8")
+    struck = np.array(sorted(area))
+    slope = case.params["layer_stiffness"] * case.material.E / case.params["layer_thickness"]
+    # per ccx segment: 2 degrees of the full circumference (axisymmetric) or the unit thickness
+    segment = 1.0 / 180.0 if element == "CAX8" else 1.0
+    stiffness = {n: 2.0 * slope * area[n] * segment for n in struck}
     first = points.shape[1] + 1  # ground nodes are numbered after the body's
     ground = np.arange(first, first + struck.size)
-    width = np.ptp(points[:, struck], axis=1).max()
-    stiffness = 1000.0 * case.material.E * width
     lines = ["*NODE, NSET=GROUND", *(_row([g, *(_number(x) for x in points[:, n])]) for g, n in zip(ground, struck))]
     start = model.rmesh.mesh.nelements + 1
-    lines += ["*ELEMENT, TYPE=GAPUNI, ELSET=WALLGAPS",
-              *(f"{start + j}, {n + 1}, {g}" for j, (n, g) in enumerate(zip(struck, ground)))]
-    lines += ["*GAP, ELSET=WALLGAPS", f"{_number(case.wall.gap)}, {_number(-normal[0])}, {_number(-normal[1])}, 0., , "
-              f"{_number(stiffness)}"]
+    for j, (n, g) in enumerate(zip(struck, ground)):
+        lines += [f"*ELEMENT, TYPE=GAPUNI, ELSET=WALLGAP{j + 1}", f"{start + j}, {n + 1}, {g}",
+                  f"*GAP, ELSET=WALLGAP{j + 1}",
+                  f"{_number(case.wall.gap)}, {_number(normal[0])}, {_number(normal[1])}, 0., , "
+                  f"{_number(stiffness[n])}"]
     lines += ["*BOUNDARY", *(f"{g}, 1, 3" for g in ground)]
-    return lines, ground
+    return lines
+
+
+def _lumped_face_area(points, cells, faces, axisymmetric: bool) -> dict:
+    """Node -> its share of the face's area (whole circumference when axisymmetric): on each
+    quadratic edge the diagonal of its consistent (r-weighted) mass, scaled to the edge's area."""
+    g, w = np.polynomial.legendre.leggauss(4)
+    xi, w = (g + 1) / 2, w / 2
+    shape = np.array([(1 - xi) * (1 - 2 * xi), 4 * xi * (1 - xi), xi * (2 * xi - 1)])  # end a, middle, end b
+    area = {}
+    for e, k in faces:
+        a, b = (int(cells[e, i]) for i in FACES[2][k - 1])
+        m = int(cells[e, 4 + k - 1])
+        x = points[:, a][:, None] + np.outer(points[:, b] - points[:, a], xi)
+        length = float(np.linalg.norm(points[:, b] - points[:, a]))
+        weight = w * length * (2 * np.pi * x[0] if axisymmetric else 1.0)
+        diag = (shape**2 * weight).sum(axis=1)
+        share = diag / diag.sum() * weight.sum()
+        for node, s in zip((a, m, b), share):
+            area[node] = area.get(node, 0.0) + float(s)
+    return area
