@@ -17,7 +17,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cases.geometry import RING
 from cases.params import UnsupportedCase
 
 from ..face import plane_face
@@ -75,7 +74,7 @@ def build_deck(case) -> Deck:
     element = "C3D20" if rep == SOLID else ("CAX8" if rep == AXISYMMETRIC else "CPE8")
     used = np.unique(cells[:, :n_corner])
     points = np.asarray(mesh.p, float)
-    points = np.where(np.abs(points) < 1e-12 * np.abs(points).max(), 0.0, points)  # ccx misreads 1e-16
+    points = np.where(np.abs(points) < 1e-12 * np.abs(points).max(), 0.0, points)  # see _number
     out = [
         f"** {case.title}",
         f"** written by smfem export from case {case.name!r} with {_params(case)}",
@@ -98,7 +97,7 @@ def build_deck(case) -> Deck:
     probe_nodes = _probe_nodes(case, model, points, used)
     if probe_nodes:
         out += ["*NSET, NSET=PROBES", *_rows(sorted(set(probe_nodes.values())))]
-    out += [f"*AMPLITUDE, NAME=STEPLOAD", f"0., 1., {case.t_end:.13g}, 1."]
+    out += ["*AMPLITUDE, NAME=STEPLOAD", f"0., 1., {case.t_end:.13g}, 1."]
     if fixed_increments(case):
         out += [f"*STEP, INC={case.n_steps + 10}", "*DYNAMIC, DIRECT, ALPHA=0.", f"{case.dt:.13g}, {case.t_end:.13g}"]
     else:  # ccx's own increments, at most dt, cut back where its Newton does not converge
@@ -116,9 +115,9 @@ def build_deck(case) -> Deck:
 
 
 def fixed_increments(case) -> bool:
-    """Linear runs march at the case's dt exactly. With plasticity or contact ccx's Newton
-    fails at dt in the first steps of these shock loads (the thick cylinder at nu = 0 in its
-    first increment; the rod at its second): there it chooses its increments, at most dt."""
+    """Linear runs march at the case's dt exactly. With plasticity ccx's Newton can fail at dt
+    in the first steps of a shock load (the thick cylinder at nu = 0, in its first increment):
+    there ccx chooses its increments, at most dt, and the results are interpolated onto dt."""
     return not case.material.plastic
 
 
@@ -127,7 +126,8 @@ def _params(case) -> str:
 
 
 def _number(x: float) -> str:
-    """A coordinate in at most 19 characters (CalculiX reads longer numbers wrong)."""
+    """A number in 13 significant digits (coordinates: round-off zeros are zeroed before, as ccx
+    misread values such as 2.44929359829471e-16 into nonpositive Jacobians)."""
     return f"{x:.13g}"
 
 

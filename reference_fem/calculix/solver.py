@@ -22,7 +22,6 @@ import resource
 import shutil
 import subprocess
 import tempfile
-import time
 from pathlib import Path
 from typing import Callable
 
