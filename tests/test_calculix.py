@@ -94,9 +94,14 @@ def test_a_wall_scene_is_refused_with_the_reason(tmp_path, capsys):
 
 
 @needs_ccx
-def test_the_3d_deck_runs_in_ccx():
-    result = solve("calculix", get_case("thick_cylinder", {"dim": 3, "t_end": 8e-5}))
-    assert result.converged and result.info["element"] == "C3D20"
+def test_3d_thick_cylinder_within_1_percent_of_the_reference_3d():
+    """C3D20 against the reference's Hex27 on the same mesh and dt (first 1 ms; the whole window
+    measured 0.06 / 0.30 / 0.02 %)."""
+    case = get_case("thick_cylinder", {"dim": 3, "t_end": 1e-3})
+    ccx, ref = solve("calculix", case), solve("reference", case)
+    assert ccx.converged and ccx.info["element"] == "C3D20"
+    for name in case.probe_names:
+        assert _relative_max_error(ccx.history[name], ref.history[name]) < 0.01, name
 
 
 @needs_ccx
