@@ -79,7 +79,8 @@ def overview(ctx: ReportContext) -> list[Section]:
     blocks = [
         p("How accurate and how fast SMFEM (the semi-analytic FEM: a finite-element cross-section with "
           "Fourier series along the third coordinate) is against the independent scikit-fem reference "
-          "solver, in 2D (plane strain or axisymmetric) and in full 3D, on every verification case. "
+          "solver, in 2D (plane strain or axisymmetric) and in full 3D, and against CalculiX (where ccx is "
+          "installed) on the reference's mesh, on every verification case. "
           "Every run is what 'smfem run' does with the parameters shown. Errors are total errors, against a "
           "truth per case converged in mesh, harmonics and time, with its own uncertainty ('smfem truth'); "
           "each solver's series spans the mesh and the time step, so its work-precision front answers "
@@ -212,6 +213,11 @@ def methods(ctx: ReportContext) -> list[Section]:
         "rod_impact: every history is seen through a moving average over 2R/c (the time a wave takes "
         "to cross the rod's diameter) before it is compared, truth uncertainties included: the ringing "
         "behind the wave front is mesh-dependent in both solvers.",
+        "CalculiX (ccx, one thread): one run per case at the case's settings in 2D, on the reference FEM's "
+        "mesh with serendipity elements (CPE8 / CAX8), from the deck 'smfem export' writes; Newmark with "
+        "ALPHA = 0 at the case's dt (plastic scenes: ccx's own increments of at most dt, interpolated onto "
+        "the dt grid); its plastic strains are nodal PEEQ (accumulated), not the cases' sqrt(2/3 eps_p:eps_p). "
+        "Its CPU time is ccx's own. A scene with a rigid wall is not solved (the case's section says why).",
         "Observed order: slope of log(error) against log(h), h = dt at a fixed mesh, or dof^(-1/2) at the "
         "case's time step.",
         "Runs are cached by case, resolved parameters, solver and a hash of the solver's source files: "
