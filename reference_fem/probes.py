@@ -60,10 +60,8 @@ class Probes:
         if kind == "edge_mean" and fld == "sigma" and tuple(probe.component) == ("n", "n"):
             return self._face_normal_stress(probe.edge)
         if kind == "body_mean" and fld in ("u", "v"):
-            e = self._direction_field(probe.component[0])
-            mass = model.M @ np.ones(model.basis.N)
             # a sparse row: its product is no BLAS call (whose threads stall on a busy machine)
-            weights = sp.csr_matrix((e @ model.M) / mass[:: model.dim].sum())
+            weights = sp.csr_matrix(body_mean_row(model, probe.component[0]))
             if fld == "u":
                 return lambda u, v, a, s: (weights @ u)[0]
             return lambda u, v, a, s: (weights @ v)[0]
@@ -94,8 +92,11 @@ class Probes:
         q = e @ model.Q
         return lambda u, v, a, s: (k_row @ u + m_row @ a)[0] - q
 
-    def _direction_field(self, component: int) -> np.ndarray:
-        """Full dof vector of the unit direction of body ``component`` (1-based) at every node."""
-        model = self.model
-        R = body_rotation(model.case, model.rep, model.rmesh.mesh.doflocs)
-        return R[:, component - 1, : model.dim].ravel()
+
+def body_mean_row(model, component: int) -> np.ndarray:
+    """The row ``w`` with ``w @ x`` the mass-weighted mean of body ``component`` (1-based) of the
+    full dof vector ``x``: ``e^T M x / m``, ``e`` the component's direction at every node."""
+    R = body_rotation(model.case, model.rep, model.rmesh.mesh.doflocs)
+    e = R[:, component - 1, : model.dim].ravel()
+    mass = model.M @ np.ones(model.basis.N)
+    return (e @ model.M) / mass[:: model.dim].sum()

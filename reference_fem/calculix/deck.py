@@ -29,6 +29,8 @@ FACES = {
     2: ((0, 1), (1, 2), (2, 3), (3, 0)),
     3: ((0, 1, 2, 3), (4, 7, 6, 5), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7)),
 }
+#: nodes of the serendipity element (its corners and mid-sides) by mesh dimension
+CORNERS = {2: 8, 3: 20}
 #: smallest increment ccx may cut back to, as a fraction of dt (plastic and contact runs)
 MIN_INCREMENT = 1e-4
 PER_LINE = 8  # numbers per data line (Abaqus allows 16; short lines read better)
@@ -45,20 +47,20 @@ class Deck:
     points : mesh-frame coordinates of every node of the reference mesh, ``(dim, n)``; node
         ``k`` of the deck is ``k + 1`` (the Lagrange face and centre nodes are left out)
     cells : the reference mesh's cells (VTK quad9 / hexahedron27 order), ``(n_elements, 9 | 27)``
-    probe_nodes : probe name -> deck node at the probe point (point probes only)
     model : the reference model the deck was made from (supports, mass, faces)
+    probe_nodes : probe name -> deck node at the probe point (point probes only)
     """
 
     text: str
     element: str
     points: np.ndarray
     cells: np.ndarray
+    model: Model
     probe_nodes: dict = field(default_factory=dict)
-    model: Model | None = None
 
     @property
     def corner_count(self) -> int:
-        return 8 if self.points.shape[0] == 2 else 20
+        return CORNERS[self.points.shape[0]]
 
 
 def build_deck(case) -> Deck:
@@ -70,7 +72,7 @@ def build_deck(case) -> Deck:
     model = Model(case)
     mesh, rep, dim = model.rmesh.mesh, model.rep, model.dim
     _, cells = vtk_cells(mesh)
-    n_corner = 8 if dim == 2 else 20
+    n_corner = CORNERS[dim]
     element = "C3D20" if rep == SOLID else ("CAX8" if rep == AXISYMMETRIC else "CPE8")
     used = np.unique(cells[:, :n_corner])
     points = np.asarray(mesh.p, float)
@@ -111,7 +113,7 @@ def build_deck(case) -> Deck:
     if probe_nodes:
         out += ["*NODE PRINT, NSET=PROBES", "U"]
     out += ["*END STEP", ""]
-    return Deck("\n".join(out), element, points, cells, probe_nodes, model)
+    return Deck("\n".join(out), element, points, cells, model, probe_nodes)
 
 
 def fixed_increments(case) -> bool:

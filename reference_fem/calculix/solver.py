@@ -31,6 +31,7 @@ from cases.params import ToolMissing, UnsupportedCase
 from cases.result import RunResult
 
 from ..frames import body_point_to_mesh, body_rotation
+from ..probes import body_mean_row
 from .deck import Deck, build_deck, fixed_increments
 from .frd import read_frd, read_sta
 
@@ -198,11 +199,8 @@ class _Fields:
 
     def _body_mean(self, probe, nodal: np.ndarray) -> float:
         """Mass-weighted mean of a body component (consistent mass of the completed field)."""
-        model = self.deck.model
         if probe.component not in self._mass_rows:
-            R = body_rotation(self.case, model.rep, model.rmesh.mesh.doflocs)
-            e = R[:, probe.component[0] - 1, : self.dim].ravel()
-            self._mass_rows[probe.component] = (e @ model.M) / (model.M @ np.ones(model.basis.N))[:: self.dim].sum()
+            self._mass_rows[probe.component] = body_mean_row(self.deck.model, probe.component[0])
         full = complete(self.deck.cells, nodal[:, : self.dim].copy(), self.dim)
         return float(self._mass_rows[probe.component] @ full.ravel())
 
