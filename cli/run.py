@@ -8,7 +8,7 @@ from pathlib import Path
 
 from cases import get_case, parse_sets
 from runs.files import write_run
-from runs.registry import CALCULIX, REFERENCE, SMFEM, solve
+from runs.registry import CALCULIX, EXPLICIT, REFERENCE, SMFEM, solve
 
 from .usage import EXIT_NOT_CONVERGED, UsageError, add_sets, check_writable
 
@@ -16,8 +16,10 @@ from .usage import EXIT_NOT_CONVERGED, UsageError, add_sets, check_writable
 def add(sub) -> None:
     run = sub.add_parser("run", help="run one case and write history.csv, summary.json, fields.vtu")
     run.add_argument("case")
-    run.add_argument("--solver", choices=(SMFEM, REFERENCE, CALCULIX), default=SMFEM,
-                     help="calculix: CalculiX (ccx on PATH) on the reference mesh, --set dim=2|3")
+    run.add_argument("--solver", choices=(SMFEM, REFERENCE, CALCULIX, EXPLICIT), default=SMFEM,
+                     help="calculix: CalculiX (ccx on PATH) on the reference mesh, --set dim=2|3; "
+                          "reference-explicit: the reference's mesh with central differences on a lumped "
+                          "mass at half the critical step (the truth engine; dt is the output interval)")
     add_sets(run)
     run.add_argument("--out", default=None, help="output directory (default: out/CASE-SOLVER)")
     run.add_argument("--no-fields", action="store_true", help="do not write fields.vtu")

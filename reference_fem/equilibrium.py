@@ -58,6 +58,10 @@ class Elastic:
     def peps(self) -> np.ndarray:
         return equivalent_plastic_strain(self.eps_p)
 
+    def stress_at(self, q: int) -> np.ndarray:
+        """The stress at quadrature point ``q``, ``(nc,)`` (Mandel, mesh frame)."""
+        return self.sigma[q]
+
     def strain(self, u: np.ndarray) -> np.ndarray:
         """Mandel strain at every quadrature point, ``(n_qp, nc)``, of free-dof values ``u``."""
         return (self.B @ u).reshape(self.model.n_qp, -1)

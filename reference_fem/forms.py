@@ -104,3 +104,39 @@ def mass(u, v, w):
 def pressure(v, w):
     """Pressure ``w.q`` (compression positive) on the outward normal ``w.n``, times ``w.weight``."""
     return -w.q * dot(w.n, v) * w.weight
+
+
+def bbar_operator(B: sp.csr_matrix, weights: np.ndarray, x_qp: np.ndarray, n_qp_element: int) -> sp.csr_matrix:
+    """The strain operator with its volumetric part projected per element (B-bar, Hughes 1980).
+
+    The volumetric strain ``theta = eps_1 + eps_2 + eps_3`` at an element's quadrature points
+    is replaced by its weighted L2 projection onto ``{1, x, y(, z)}`` over the element (the
+    pressure space of the Q9/P3 and Q27/P4 mixed elements, stable and free of volumetric
+    locking); the deviatoric strain is left alone. In plane strain the out-of-plane normal
+    strain then becomes ``(theta_bar - theta) / 3``, as in the 3D form.
+
+    Parameters
+    ----------
+    B : strain operator of :func:`strain_operator`, rows ``q * nc + c``
+    weights : (n_qp,) integration weights
+    x_qp : (dim, n_qp) quadrature points, element by element (``n_qp_element`` each)
+    """
+    n_qp = weights.size
+    nc = B.shape[0] // n_qp
+    nel, k = n_qp // n_qp_element, n_qp_element
+    # rows summing the three normal components: theta = S B u
+    S = sp.csr_matrix((np.ones(3 * n_qp), (np.repeat(np.arange(n_qp), 3), (np.arange(n_qp)[:, None] * nc
+                       + np.arange(3)).ravel())), shape=(n_qp, n_qp * nc))
+    x = x_qp.reshape(x_qp.shape[0], nel, k)
+    w = weights.reshape(nel, k)
+    centre = np.einsum("dek,ek->de", x, w) / w.sum(axis=1)
+    phi = np.concatenate([np.ones((1, nel, k)), x - centre[:, :, None]]).transpose(1, 2, 0)  # (nel, k, n_p)
+    gram = np.einsum("ekp,ek,ekq->epq", phi, w, phi)
+    P = np.einsum("ekp,epq,elq,el->ekl", phi, np.linalg.inv(gram), phi, w)  # (nel, k, k) projections
+    P -= np.eye(k)
+    blocks = sp.bsr_matrix((P, np.arange(nel), np.arange(nel + 1)), shape=(n_qp, n_qp)).tocsr()
+    theta = S @ B
+    out = (B + S.T @ (blocks @ theta) / 3.0).tocsr()
+    out.data[np.abs(out.data) <= 1e-14 * np.abs(out.data).max()] = 0.0  # the projection's round-off
+    out.eliminate_zeros()
+    return out

@@ -1,4 +1,5 @@
-"""Mass matrices: consistent, and redistributed away from a contact face.
+"""Mass matrices: consistent, lumped (for explicit time stepping), and redistributed away from
+a contact face.
 
 With exact (Lagrange multiplier) contact, the consistent mass gives the contact nodes an
 inertia of their own: Newmark then bounces them off the wall every other step, the wall force
@@ -27,6 +28,24 @@ def consistent_mass(basis, rho: float, axisymmetric: bool) -> sp.csr_matrix:
     """``int rho u . v`` (times r when axisymmetric) over the elements of ``basis``."""
     r = np.asarray(basis.global_coordinates())[0] if axisymmetric else np.ones(basis.dx.shape)
     return asm(forms.mass, basis, rho=rho, weight=r).tocsr()
+
+
+def lumped_mass(basis, rho: float, axisymmetric: bool) -> np.ndarray:
+    """Diagonal mass by HRZ lumping (Hinton, Rock & Zienkiewicz 1976), shape ``(n_dof,)``.
+
+    Each element's consistent diagonal ``int rho phi_i^2`` is scaled so that it sums to the
+    element's mass: every entry is positive for any Lagrange element (nodal quadrature of the
+    9-node quadrilateral gives zero to the axis nodes of an axisymmetric section, whose axial
+    motion then has no inertia) and the total mass is kept. Same units as
+    :func:`consistent_mass`.
+    """
+    scalar = CellBasis(basis.mesh, basis.elem.elem, quadrature=basis.quadrature)
+    r = np.asarray(scalar.global_coordinates())[0] if axisymmetric else np.ones(scalar.dx.shape)
+    w = rho * scalar.dx * r  # (n_elements, n_qp)
+    diag = np.array([np.einsum("eq,eq->e", np.asarray(phi[0]) ** 2, w) for phi in scalar.basis])  # (n_local, nel)
+    share = diag * (w.sum(axis=1) / diag.sum(axis=0))
+    nodes = np.bincount(scalar.element_dofs.ravel(), share.ravel(), minlength=scalar.N)
+    return np.repeat(nodes, basis.mesh.dim())
 
 
 def redistributed_mass(M: sp.csr_matrix, basis, facets: np.ndarray, rho: float, axisymmetric: bool,

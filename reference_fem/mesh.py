@@ -20,6 +20,13 @@ Resolution (``refine`` = ``case.params['refine']`` multiplies every refinable co
   its radial density follows the section's axis-direction count.
 Break points are inserted where cut-outs, load patches and displacement probes begin or end,
 so these are element boundaries or nodes.
+
+Grading (``grading`` = beta > 1, for truths): a cut-out's limit inside the body is a
+re-entrant corner line (the cut-outs' corners, the notch root). Every segment between break
+points that ends on such a line gets its nodes at ``xi^beta`` of its length, measured from
+that end (from both ends, symmetrically, when both are such lines); the element count is that
+of the uniform mesh, so a graded mesh costs the same per step, but its smallest element is
+``n^(beta - 1)`` times shorter (n elements in the segment).
 """
 
 from __future__ import annotations
@@ -131,22 +138,27 @@ class RefMesh:
     counts: dict
 
 
-def build_mesh(case) -> RefMesh:
-    """Mesh ``case`` in the representation its ``dim`` parameter asks for."""
+def build_mesh(case, grading: float = 1.0) -> RefMesh:
+    """Mesh ``case`` in the representation its ``dim`` parameter asks for; ``grading`` (at
+    least 1, 1 = uniform) grades it toward the re-entrant corner lines (module docstring)."""
+    if not grading >= 1.0:
+        raise ValueError(f"grading must be at least 1, not {grading!r}")
     rep = representation(case)
     dim = 3 if rep == SOLID else 2
     scale = SECTION_SCALE[dim] * case.refine
     sec = case.section
     s_extra, t_extra, x3_extra = _breaks(case, rep)
-    s_nodes = axis_nodes(sec.s, scale, s_extra)
-    t_nodes = axis_nodes(sec.t, scale, t_extra)
+    s_sing, t_sing, x3_sing = corner_lines(case) if grading > 1.0 else ((), (), ())
+    s_nodes = axis_nodes(sec.s, scale, s_extra, Grading(s_sing, grading))
+    t_nodes = axis_nodes(sec.t, scale, t_extra, Grading(t_sing, grading))
+    x3_grading = Grading(x3_sing, grading)
     if case.body == RING and rep != AXISYMMETRIC:
-        x3_nodes = _span_nodes(0.0, 2 * np.pi, x3_extra, 2 * np.pi / (N_THETA * case.refine))
+        x3_nodes = _span_nodes(0.0, 2 * np.pi, x3_extra, 2 * np.pi / (N_THETA * case.refine), x3_grading)
     elif case.body != RING:
         # the section grid's own finest element, not one a break point cut short: a 0.1 mm
         # notch would otherwise make 3000 elements along a 0.3 m span
         h = min(np.diff(axis_nodes(a, scale)).min() for a in (sec.s, sec.t) if a.refinable)
-        x3_nodes = _span_nodes(0.0, case.length, x3_extra, h)
+        x3_nodes = _span_nodes(0.0, case.length, x3_extra, h, x3_grading)
     else:
         x3_nodes = None
 
@@ -180,27 +192,71 @@ def build_mesh(case) -> RefMesh:
     return RefMesh(mesh, rep, dict(counts, elements=mesh.nelements))
 
 
-def axis_nodes(axis, scale: float, extra=()) -> np.ndarray:
+@dataclass(frozen=True)
+class Grading:
+    """Nodes graded toward the coordinates ``toward`` with exponent ``beta`` (1: uniform)."""
+
+    toward: tuple = ()
+    beta: float = 1.0
+
+    def nodes(self, c0: float, c1: float, n: int) -> np.ndarray:
+        """``n + 1`` nodes on ``[c0, c1]``, graded toward an end that is in ``toward``."""
+        xi = np.linspace(0.0, 1.0, n + 1)
+        tol = 1e-9 * max(abs(c0), abs(c1), c1 - c0)
+        at0, at1 = (self.beta > 1 and any(abs(c - x) <= tol for x in self.toward) for c in (c0, c1))
+        if at0 and at1:
+            xi = np.where(xi <= 0.5, 0.5 * (2 * xi) ** self.beta, 1 - 0.5 * (2 * (1 - xi)) ** self.beta)
+        elif at0:
+            xi = xi**self.beta
+        elif at1:
+            xi = 1 - (1 - xi) ** self.beta
+        return c0 + (c1 - c0) * xi
+
+
+UNIFORM = Grading()
+
+
+def axis_nodes(axis, scale: float, extra=(), grading: Grading = UNIFORM) -> np.ndarray:
     """Node coordinates along a section axis, shape ``(n + 1,)``.
 
     Each segment of ``axis`` keeps its element size divided by ``scale`` (refinable axes
     only); ``extra`` break points inside a segment split it, each part getting at least one
-    element.
+    element (graded as ``grading`` says).
     """
     scale = scale if axis.refinable else 1.0
     parts = []
     for a, b, n in zip(axis.breaks[:-1], axis.breaks[1:], axis.counts):
         h = (b - a) / max(1.0, n * scale)
-        parts.append(_span_nodes(a, b, extra, h)[:-1])
+        parts.append(_span_nodes(a, b, extra, h, grading)[:-1])
     return np.concatenate(parts + [np.array([axis.breaks[-1]])])
 
 
-def _span_nodes(a: float, b: float, extra, h: float) -> np.ndarray:
-    """Nodes on ``[a, b]`` with the breaks ``extra`` that fall inside, elements about ``h`` long."""
+def _span_nodes(a: float, b: float, extra, h: float, grading: Grading = UNIFORM) -> np.ndarray:
+    """Nodes on ``[a, b]`` with the breaks ``extra`` that fall inside, elements about ``h`` long
+    (their count; the nodes graded as ``grading`` says)."""
     tol = 1e-9 * (b - a)
     cuts = sorted({a, b} | {float(e) for e in extra if a + tol < e < b - tol})
-    parts = [np.linspace(c0, c1, max(1, int(round((c1 - c0) / h))) + 1)[:-1] for c0, c1 in zip(cuts[:-1], cuts[1:])]
+    parts = [grading.nodes(c0, c1, max(1, int(round((c1 - c0) / h))))[:-1] for c0, c1 in zip(cuts[:-1], cuts[1:])]
     return np.concatenate(parts + [np.array([b])])
+
+
+def corner_lines(case) -> tuple[tuple, tuple, tuple]:
+    """Coordinates ``(s, t, x3)`` of the cut-outs' limits that lie inside the body: the lines
+    of their re-entrant corners (a limit on the body's boundary makes a convex corner)."""
+    sec = case.section
+    period = 2 * np.pi if case.body == RING else None
+    inside = lambda v, lo, hi: lo + 1e-9 * (hi - lo) < v < hi - 1e-9 * (hi - lo)
+    s, t, x3 = set(), set(), set()
+    for c in case.cutouts:
+        s |= {float(v) for v in c.s_range if inside(v, *sec.s.span)}
+        t |= {float(v) for v in c.t_range if inside(v, *sec.t.span)}
+        for a, b in c.x3_intervals:
+            if period is not None:
+                if not np.isclose(b - a, period):
+                    x3 |= {float(np.mod(a, period)), float(np.mod(b, period))}
+            else:
+                x3 |= {float(v) for v in (a, b) if inside(v, 0.0, case.length)}
+    return tuple(sorted(s)), tuple(sorted(t)), tuple(sorted(x3))
 
 
 def _breaks(case, rep: str):

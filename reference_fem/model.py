@@ -11,7 +11,7 @@ from cases.geometry import PRISM, RING
 
 from . import forms
 from .frames import AXISYMMETRIC, SOLID, in_intervals, section_of, x3_of
-from .mass import consistent_mass, redistributed_mass
+from .mass import consistent_mass, lumped_mass, redistributed_mass
 from .mesh import RefMesh, build_mesh
 
 #: Gauss rule: 3 points per direction, exact for the stiffness and the consistent mass of
@@ -27,10 +27,12 @@ class Model:
     case, rmesh : the case and its :class:`~reference_fem.mesh.RefMesh`
     basis : skfem.CellBasis of the vector quadratic element
     B, weights : strain operator ``(n_qp * nc, n_dof)`` and weights ``(n_qp,)``
-        (see :func:`reference_fem.forms.strain_operator`)
+        (see :func:`reference_fem.forms.strain_operator`); ``bbar``: its volumetric part
+        projected per element (:func:`reference_fem.forms.bbar_operator`)
     x_qp : ndarray, ``(dim, n_qp)``, quadrature points in mesh coordinates
     M : csr_matrix, consistent mass (kg, or kg per radian when axisymmetric); with a wall, the
-        layer at the wall's face redistributed (:mod:`reference_fem.mass`)
+        layer at the wall's face redistributed (:mod:`reference_fem.mass`); ``lumped``: the
+        diagonal HRZ mass instead (explicit time stepping), not redistributed
     Q : ndarray, ``(n_dof,)``, load vector of the case's pressures (N; per radian if axisymmetric)
     fixed, free : ndarray of int, supported and free dof indices
     fix_rigid_body : for static solves of rings that are not axisymmetric (no support against
@@ -45,7 +47,8 @@ class Model:
     x3 = 0 and L, the Fourier basis's end condition), axisymmetric sections u_r = 0 on the axis.
     """
 
-    def __init__(self, case, rmesh: RefMesh | None = None, fix_rigid_body: bool = False):
+    def __init__(self, case, rmesh: RefMesh | None = None, fix_rigid_body: bool = False, lumped: bool = False,
+                 bbar: bool = False):
         self.case = case
         self.rmesh = rmesh if rmesh is not None else build_mesh(case)
         self.rep = self.rmesh.rep
@@ -57,10 +60,15 @@ class Model:
         axisym = self.rep == AXISYMMETRIC
         self.B, self.weights = forms.strain_operator(self.basis, axisym)
         self.x_qp = np.asarray(self.basis.global_coordinates()).reshape(self.dim, -1)
+        if bbar:
+            self.B = forms.bbar_operator(self.B, self.weights, self.x_qp, self.basis.dx.shape[1])
         self.lam, self.mu = case.material.lame
         self.D = forms.elastic_matrix(self.lam, self.mu, self.dim)
-        self.M = consistent_mass(self.basis, case.material.rho, axisym)
-        if case.wall is not None:
+        if lumped:
+            self.M = sp.diags(lumped_mass(self.basis, case.material.rho, axisym)).tocsr()
+        else:
+            self.M = consistent_mass(self.basis, case.material.rho, axisym)
+        if case.wall is not None and not lumped:
             self.M = redistributed_mass(self.M, self.basis, self.edge_facets(case.wall.edge),
                                         case.material.rho, axisym, INTORDER)
         self.Q = self._load_vector()

@@ -25,7 +25,8 @@ class Return:
     Attributes
     ----------
     sigma : (n_qp, nc) stress
-    tangent : (n_qp, nc, nc) consistent (algorithmic) tangent d sigma / d eps
+    tangent : (n_qp, nc, nc) consistent (algorithmic) tangent d sigma / d eps (None when not
+        asked for)
     eps_p : (n_qp, nc) plastic strain
     alpha : (n_qp,) accumulated equivalent plastic strain (drives hardening)
     yielding : (n_qp,) bool, points returned to the yield surface
@@ -50,7 +51,8 @@ def equivalent_plastic_strain(eps_p: np.ndarray) -> np.ndarray:
     return np.sqrt(2.0 / 3.0 * np.einsum("qc,qc->q", eps_p, eps_p))
 
 
-def radial_return(eps, eps_p, alpha, lam: float, mu: float, sigma_y: float, H: float) -> Return:
+def radial_return(eps, eps_p, alpha, lam: float, mu: float, sigma_y: float, H: float,
+                  tangent: bool = True) -> Return:
     """Stress, tangent and trial state for the total strain ``eps`` from the committed state.
 
     Parameters
@@ -60,6 +62,7 @@ def radial_return(eps, eps_p, alpha, lam: float, mu: float, sigma_y: float, H: f
     lam, mu : Lame constants (Pa)
     sigma_y : initial uniaxial yield stress (Pa), ``sqrt(3) tau_s``
     H : plastic hardening modulus (Pa), ``sigma_y(alpha) = sigma_y + H alpha`` (0 = ideal)
+    tangent : also the consistent tangent (an explicit step needs the stress only)
 
     Notes
     -----
@@ -73,28 +76,41 @@ def radial_return(eps, eps_p, alpha, lam: float, mu: float, sigma_y: float, H: f
     m = np.zeros(nc)
     m[:3] = 1.0
     eye = np.eye(nc)
-    p_dev = eye - np.outer(m, m) / 3.0
-    kappa = lam + 2.0 * mu / 3.0
     elastic = lam * np.outer(m, m) + 2.0 * mu * eye
 
-    sigma_tr = (eps - eps_p) @ elastic
-    s_tr = deviator(sigma_tr)
+    # the trial state at every point, column by column (reductions over the few components
+    # cost more than the arithmetic); the return only where points yield (few, usually)
+    eps_e = eps - eps_p
+    trace = eps_e[:, 0] + eps_e[:, 1] + eps_e[:, 2]
+    s_tr = 2.0 * mu * eps_e
+    for c in range(3):
+        s_tr[:, c] -= 2.0 * mu / 3.0 * trace
+    sigma = s_tr.copy()
+    for c in range(3):
+        sigma[:, c] += (lam + 2.0 * mu / 3.0) * trace
     norm = np.sqrt(np.einsum("qc,qc->q", s_tr, s_tr))
     q_tr = np.sqrt(1.5) * norm
     f = q_tr - (sigma_y + H * alpha)
     yielding = f > YIELD_TOL * sigma_y
-
-    dgamma = np.where(yielding, f / (3.0 * mu + H), 0.0)
-    n = s_tr / np.where(norm > 0, norm, 1.0)[:, None]
-    flow = np.sqrt(1.5) * dgamma[:, None] * n  # plastic strain increment
-    sigma = sigma_tr - 2.0 * mu * flow
+    y = np.flatnonzero(yielding)
+    if y.size:
+        dgamma = f[y] / (3.0 * mu + H)
+        n = s_tr[y] / norm[y, None]
+        flow = np.sqrt(1.5) * dgamma[:, None] * n  # plastic strain increment
+        sigma[y] -= 2.0 * mu * flow
+        eps_p, alpha = eps_p.copy(), alpha.copy()
+        eps_p[y] += flow
+        alpha[y] += dgamma
+    if not tangent:
+        return Return(sigma, None, eps_p, alpha, yielding)
     tangent = np.broadcast_to(elastic, (nq, nc, nc)).copy()
-    y = yielding
-    if y.any():
-        ratio = dgamma[y] / q_tr[y]
+    if y.size:
+        ratio = dgamma / q_tr[y]
+        kappa = lam + 2.0 * mu / 3.0
+        p_dev = eye - np.outer(m, m) / 3.0
         tangent[y] = (
             kappa * np.outer(m, m)
             + 2.0 * mu * (1.0 - 3.0 * mu * ratio)[:, None, None] * p_dev
-            + 6.0 * mu**2 * (ratio - 1.0 / (3.0 * mu + H))[:, None, None] * np.einsum("qa,qb->qab", n[y], n[y])
+            + 6.0 * mu**2 * (ratio - 1.0 / (3.0 * mu + H))[:, None, None] * np.einsum("qa,qb->qab", n, n)
         )
-    return Return(sigma, tangent, eps_p + flow, alpha + dgamma, yielding)
+    return Return(sigma, tangent, eps_p, alpha, yielding)

@@ -39,7 +39,8 @@ class Probes:
 
     ``values(u, system, v, a)`` takes the full dof vectors of displacement ``u`` (m), velocity
     ``v`` and acceleration ``a`` (zero when omitted: a static state) and the equilibrium system
-    (for stresses and plastic strains at quadrature points); it returns one float per probe.
+    (for stresses and plastic strains at quadrature points: ``stress_at(q)``, ``peps``); it
+    returns one float per probe.
     """
 
     def __init__(self, model):
@@ -79,7 +80,7 @@ class Probes:
         if "n" in probe.component:
             raise UnsupportedCase(f"reference solver: probe {probe.name!r}: normal stress needs a face, not a point")
         i, j = (c - 1 for c in probe.component)
-        return lambda u, v, a, s: (R @ mandel_to_tensor(s.sigma[q : q + 1])[0] @ R.T)[i, j]
+        return lambda u, v, a, s: (R @ mandel_to_tensor(s.stress_at(q)[None, :])[0] @ R.T)[i, j]
 
     def _face_normal_stress(self, edge: str):
         """``sigma_nn`` averaged over the plane face ``edge``, from the face's nodal reactions."""

@@ -28,7 +28,8 @@ def _system(model: Model, c: float):
     return Plastic(model, c, model.case.params["tol"]) if mat.plastic else Elastic(model, c)
 
 
-def solve(case, progress: Callable[[int, int], None] | None = None, every: int = 0) -> RunResult:
+def solve(case, progress: Callable[[int, int], None] | None = None, every: int = 0,
+          grading: float = 1.0) -> RunResult:
     """Transient response of ``case`` over its time window, Newmark (alpha 0.25, delta 0.5).
 
     Parameters
@@ -36,6 +37,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     case : cases.Case
     progress : optional ``callable(step, n_steps)`` called after every step
     every : also the field every ``every`` steps, t = 0 included (``frames``; 0: none)
+    grading : mesh grading toward the re-entrant corner lines (:func:`~reference_fem.mesh.build_mesh`)
 
     Returns
     -------
@@ -59,7 +61,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
         the scene; contact with plasticity; a wall facing a face that is not plane).
     """
     cpu0 = time.process_time()
-    rmesh = build_mesh(case)
+    rmesh = build_mesh(case, grading)
     cpu_mesh = time.process_time() - cpu0
     cpu1 = time.process_time()
     model = Model(case, rmesh)
@@ -102,7 +104,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
         t=np.array(times), history=history, n_dof=int(free.size), iterations=iterations,
         converged=converged, message=message, cpu_time_s=cpu, snapshots=snapshots,
         mesh=output_mesh(model, u_full, system, v_full), frames=frames,
-        info=dict(_info(model, system, cpu_mesh), **(log.info() if log else {})),
+        info=dict(_info(model, system, cpu_mesh), grading=grading, **(log.info() if log else {})),
     )
 
 
