@@ -13,11 +13,16 @@ from scipy.integrate import trapezoid
 
 
 def moving_average(x: np.ndarray, width: int) -> np.ndarray:
-    """Centred moving average over ``width`` samples, the ends held (no shrink at the edges)."""
-    if width < 2:
-        return np.asarray(x, float)
-    padded = np.concatenate([np.full(width, x[0]), x, np.full(width, x[-1])])
-    return np.convolve(padded, np.ones(width) / width, mode="same")[width:-width]
+    """Centred moving average over ``width`` samples (an odd count: ``width // 2`` each side);
+    near the ends over the samples there are, so an end sample is not held over a window."""
+    x = np.asarray(x, float)
+    half = width // 2
+    if half < 1:
+        return x
+    total = np.concatenate([[0.0], np.cumsum(x)])
+    i = np.arange(x.size)
+    lo, hi = np.maximum(i - half, 0), np.minimum(i + half + 1, x.size)
+    return (total[hi] - total[lo]) / (hi - lo)
 
 
 def common_grid(t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarray):
@@ -35,10 +40,15 @@ def common_grid(t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarray):
 
 
 def smoothed(x: np.ndarray, grid: np.ndarray, window: float) -> np.ndarray:
-    """``x`` seen through a moving average ``window`` s long (unchanged when ``window`` is 0)."""
+    """``x`` (sampled on ``grid``) seen through a triangular window ``window`` s wide: two
+    moving averages half that long. Its side lobes fall as the square of the frequency (one
+    moving average's only as the frequency), so ringing shorter than the window, which no
+    mesh resolves alike, is left out, and what is longer is kept. Unchanged when ``window``
+    is 0."""
     if window <= 0 or len(grid) < 2:
         return x
-    return moving_average(x, int(round(window / np.median(np.diff(grid)))))
+    width = int(round(0.5 * window / np.median(np.diff(grid))))
+    return moving_average(moving_average(x, width), width)
 
 
 def history_errors(t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarray,
@@ -47,15 +57,16 @@ def history_errors(t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarra
 
     ``max|a - b| / max|b|`` and ``sqrt(int (a - b)^2 dt / int b^2 dt)``, on the coarser of
     the two time grids (:func:`common_grid`), so runs with another ``dt`` compare too.
-    ``window`` (s): both histories are first seen through a moving average that long, for
-    scenes whose shorter features no model converges on (the case's
+    ``window`` (s): each history is first seen through a window that wide (:func:`smoothed`,
+    on its own time grid, so a finely sampled history is averaged, not sampled), for scenes
+    whose shorter features no model converges on (the case's
     ``references['comparison_window_s']``, e.g. the rod's 2R/c). NaN when the reference is
     identically zero or the windows do not overlap.
     """
+    a, b = smoothed(a, t, window), smoothed(b, t_ref, window)
     grid, a, b = common_grid(t, a, t_ref, b)
     if len(grid) < 2 or not np.any(b):
         return math.nan, math.nan
-    a, b = smoothed(a, grid, window), smoothed(b, grid, window)
     d = a - b
     l2 = math.sqrt(trapezoid(d * d, grid) / trapezoid(b * b, grid))
     return float(np.abs(d).max() / np.abs(b).max()), l2
