@@ -43,8 +43,9 @@ def code_version(solver: str) -> str:
 
 def key_of(job: Job) -> dict:
     """What identifies a run: the resolved parameters, not the overrides that led to them."""
-    return {"case": job.case, "solver": job.solver, "params": job.build().params, "fields": job.fields,
-            "version": code_version(job.solver)}
+    key = {"case": job.case, "solver": job.solver, "params": job.build().params, "fields": job.fields,
+           "version": code_version(job.solver)}
+    return {**key, "options": dict(job.options)} if job.options else key
 
 
 @dataclass
@@ -64,7 +65,8 @@ class Run:
         p = self.summary["params"] if self.summary else self.job.build().params
         default_dt = get_case(self.job.case).params["dt"]
         text = f"r{p.get('refine', 1)}" + (f" H{p.get('harmonics')}" if self.job.solver in (SMFEM, MODAL) else "")
-        return text + (f" dt{p['dt']:g}" if p.get("dt", default_dt) != default_dt else "")
+        text += f" dt{p['dt']:g}" if p.get("dt", default_dt) != default_dt else ""
+        return text + "".join(f" {k}" if v is True else f" {k} {v}" for k, v in self.job.options)
 
     @property
     def usable(self) -> bool:

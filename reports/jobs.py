@@ -17,7 +17,7 @@ from cases.params import ToolMissing
 from runs.files import write_run
 from runs.registry import family, solve
 
-from .plan import MODAL, REF3D, SMFEM
+from .plan import EXPLICIT, MODAL, REF3D, SMFEM
 
 OK, NOT_CONVERGED, NOT_AVAILABLE, FAILED = "ok", "not converged", "not available", "failed"
 #: an optional solver whose program is not on this machine (CalculiX): not kept in the cache,
@@ -32,26 +32,29 @@ class Job:
 
     ``overrides`` is a sorted tuple of ``(key, value)`` so that a job can be hashed; ``fields``
     asks an SMFEM run for ``fields.vtu`` and its time series ``fields.pvd`` (and plastic zones,
-    which plastic runs always draw).
+    which plastic runs always draw); ``options`` (sorted ``(key, value)`` too) are the solver's
+    own options (:func:`runs.registry.solve`), part of the run's identity.
     """
 
     case: str
     solver: str
     overrides: tuple
     fields: bool = False
+    options: tuple = ()
 
     @classmethod
-    def make(cls, case: str, solver: str, overrides: dict, fields: bool = False) -> Job:
-        if solver not in (SMFEM, MODAL):
+    def make(cls, case: str, solver: str, overrides: dict, fields: bool = False, options: dict | None = None) -> Job:
+        if solver not in (SMFEM, MODAL, EXPLICIT):  # the explicit reference runs at the case's dim
             overrides = dict(overrides, dim=3 if solver == REF3D else 2)
-        return cls(case, solver, tuple(sorted(overrides.items())), fields and solver == SMFEM)
+        return cls(case, solver, tuple(sorted(overrides.items())), fields and solver == SMFEM,
+                   tuple(sorted((options or {}).items())))
 
     def build(self):
         """The case with the resolved parameters (raises ParameterError on a bad override)."""
         return get_case(self.case, dict(self.overrides))
 
     def describe(self) -> str:
-        sets = " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in self.overrides)
+        sets = " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in self.overrides + self.options)
         return f"{self.case} {self.solver} {sets}".strip()
 
 
@@ -84,7 +87,8 @@ def execute(job: Job) -> Outcome:
     case = job.build()
     wall0 = time.perf_counter()
     try:
-        result = solve(job.solver, case, fields=job.fields, every=series_every(case) if job.fields else 0)
+        result = solve(job.solver, case, fields=job.fields, every=series_every(case) if job.fields else 0,
+                       options=dict(job.options) or None)
     except ToolMissing as exc:
         return Outcome(NOT_INSTALLED, str(exc))
     except UnsupportedCase as exc:

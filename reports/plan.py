@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from cases import ParameterError, get_case
-from runs.registry import CALCULIX, MODAL, REF2D, REF3D, SMFEM
+from runs.registry import CALCULIX, EXPLICIT, MODAL, REF2D, REF3D, SMFEM
 
 #: the solvers a study has series of (the modal solution, ``MODAL``, makes truths only;
 #: CalculiX, optional, one run per case at the case's settings in 2D)
@@ -23,7 +23,8 @@ RESOLUTION_KEYS = ("refine", "harmonics", "dt")
 #: the case's (3-D errors are mostly spatial, and a 3-D step is dear)
 THREE_D = (0.5, 1, 2)
 #: how a truth is made (:mod:`reports.truth`)
-MODAL_TRUTH, TIME_TRUTH = "modal", "time-step halving"
+MODAL_TRUTH, TIME_TRUTH, EXPLICIT_TRUTH = "modal", "time-step halving", "explicit"
+TRUTH_METHODS = (MODAL_TRUTH, TIME_TRUTH, EXPLICIT_TRUTH)
 
 
 @dataclass(frozen=True)
@@ -50,6 +51,15 @@ class TruthPlan:
     ``time-step halving`` (plastic, contact, cut-outs): ``solver`` on ``refine[0]`` at
     ``dt / d`` for each of ``dt_divisors``, Richardson in dt where the observed order is near
     2; the meshes ``refine`` at the case's dt correct it to the finest and bound what is left.
+
+    ``explicit`` (plastic, contact, cut-outs): the explicit reference
+    (:mod:`reference_fem.explicit`, central differences at a fixed fraction of the critical
+    step, so the step halves with the mesh) over the ``refine`` ladder (each level twice the
+    last), sampled every ``dt / output_divisor``, at ``dim`` (2 or 3) with the solver
+    ``options`` (B-bar, mesh grading). Richardson's extrapolation of the three finest levels
+    at their observed order is the truth where it is checked by the ``check`` pair (an
+    interleaved ladder, e.g. r3 and r6 beside r2, r4, r8), extrapolated at the same order;
+    else the finest level with its grid convergence index.
     """
 
     method: str
@@ -58,12 +68,31 @@ class TruthPlan:
     dt_divisors: tuple[int, ...] = (1, 2, 4)
     solver: str = REF2D
     output_divisor: int = 16
+    dim: int = 2
+    options: tuple = ()
+    check: tuple[int, ...] = ()
 
     def __post_init__(self):
-        if self.method not in (MODAL_TRUTH, TIME_TRUTH):
-            raise ValueError(f"truth method must be {MODAL_TRUTH!r} or {TIME_TRUTH!r}")
+        if self.method not in TRUTH_METHODS:
+            raise ValueError(f"truth method must be one of {TRUTH_METHODS}")
         if self.method == TIME_TRUTH and (len(self.refine) < 2 or len(self.dt_divisors) < 3):
             raise ValueError("a time-step-halving truth needs two meshes or more and at least three dt levels")
+        if self.method == EXPLICIT_TRUTH:
+            if len(self.refine) < 2 or any(b != 2 * a for a, b in zip(self.refine, self.refine[1:])):
+                raise ValueError("an explicit truth needs two meshes or more, each twice as fine as the last")
+            if self.check and (len(self.check) != 2 or self.check[1] != 2 * self.check[0]):
+                raise ValueError("an explicit truth's check is a pair of meshes, the second twice as fine")
+
+    def describe(self) -> dict:
+        """What identifies the plan (its part of a stored truth's key)."""
+        out = {"method": self.method, "refine": list(self.refine), "output_divisor": self.output_divisor}
+        if self.method == MODAL_TRUTH:
+            out["harmonics"] = list(self.harmonics)
+        if self.method == TIME_TRUTH:
+            out |= {"solver": self.solver, "dt_divisors": list(self.dt_divisors)}
+        if self.method == EXPLICIT_TRUTH:
+            out |= {"solver": self.solver, "dim": self.dim, "options": dict(self.options), "check": list(self.check)}
+        return out
 
 
 @dataclass(frozen=True)
@@ -80,6 +109,16 @@ class CaseStudy:
     reference: tuple[str, dict]
     truth: TruthPlan | None = None
     base: dict = field(default_factory=dict)
+
+
+#: the meshes of an explicit truth: the ladder r2, r4, r8 and the interleaved pair r3, r6 that
+#: checks its extrapolation (:class:`TruthPlan`)
+EXPLICIT_LADDER = dict(refine=(2, 4, 8), check=(3, 6))
+
+
+def explicit_truth(**options) -> TruthPlan:
+    """An explicit truth over :data:`EXPLICIT_LADDER` with the solver ``options``."""
+    return TruthPlan(EXPLICIT_TRUTH, solver=EXPLICIT, options=tuple(sorted(options.items())), **EXPLICIT_LADDER)
 
 
 def _s(solver, *levels):
@@ -167,7 +206,7 @@ def full() -> tuple[CaseStudy, ...]:
             _s(REF3D, *grid("notched_cylinder", _r(1), (0.5, 1, 2, 4))),
             _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 3}),
-            truth=TruthPlan(TIME_TRUTH, refine=(2, 3), dt_divisors=(1, 2, 4, 8))),
+            truth=explicit_truth(bbar=True)),
         CaseStudy("notched_strip", (
             _s(SMFEM, *grid("notched_strip", ({"harmonics": 80}, {"harmonics": 120}, {"harmonics": 160},
                                               {"harmonics": 240}, {"harmonics": 400}), (1, 2, 4, 8))),
@@ -175,14 +214,14 @@ def full() -> tuple[CaseStudy, ...]:
             _s(REF3D, *grid("notched_strip", _r(1), (0.5, 1, 2, 4))),
             _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 3}),
-            truth=TruthPlan(TIME_TRUTH, refine=(2, 3), dt_divisors=(1, 2, 4, 8))),
+            truth=explicit_truth(bbar=True)),
         CaseStudy("rod_impact", (
             _s(SMFEM, *grid("rod_impact", _r(1, 2, 4, 8), (1, 2, 4, 8))),
             _s(REF2D, *grid("rod_impact", _r(1, 2, 4), (1, 2, 4, 8))),
             _s(REF3D, *grid("rod_impact", _r(1), (0.5, 1, 2, 4))),
             _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 8}),
-            truth=TruthPlan(TIME_TRUTH, refine=(4, 8), dt_divisors=(1, 2, 4, 8))),
+            truth=explicit_truth()),
     )
 
 

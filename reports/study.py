@@ -14,7 +14,8 @@ from .cache import Run, RunCache
 from .executors import run_jobs
 from .jobs import Job
 from .plan import CALCULIX, REF3D, SMFEM, CaseStudy
-from .truth import Truth, assemble
+from .stored import find as find_stored
+from .truth import Truth, assemble, plan_for
 from .truth import jobs as truth_jobs
 
 
@@ -22,7 +23,7 @@ from .truth import jobs as truth_jobs
 class CaseRuns:
     """The runs of one case study: ``series[solver]`` in level order, the reference run of the
     same-dt comparison, and the truth (None when the study has no truth plan or a run it needs
-    has no history) with its runs by role."""
+    has no history) with its runs by role (none for a stored truth)."""
 
     study: CaseStudy
     series: dict[str, list[Run]]
@@ -45,10 +46,18 @@ class StudyResult:
     wall_time_s: float = 0.0
 
 
-def _jobs(study: CaseStudy) -> tuple[dict, Job, Job, dict]:
+def stored_truth(study: CaseStudy) -> tuple[Truth | None, str]:
+    """The stored truth (``truths/CASE``) of the study's case as the study sets it up, if its
+    key matches (:mod:`reports.stored`), and why not otherwise."""
+    if study.truth is None:
+        return None, "the study has no truth plan"
+    return find_stored(study.case, get_case(study.case, study.base), plan_for(study.case, study.base, "full"))
+
+
+def _jobs(study: CaseStudy, stored: bool) -> tuple[dict, Job, Job, dict]:
     """Jobs of the series, of the reference run, of the SMFEM run at the case's settings,
     which writes fields.vtu (the series run with those parameters, when there is one), and of
-    the truth by role."""
+    the truth by role (none when a ``stored`` truth stands in)."""
     def params(level):
         return get_case(study.case, {**study.base, **level}).params
 
@@ -60,7 +69,7 @@ def _jobs(study: CaseStudy) -> tuple[dict, Job, Job, dict]:
 
     series = {s.solver: [job(s.solver, level) for level in s.levels] for s in study.series}
     fields = next((j for j in series.get(SMFEM, ()) if j.fields), None) or job(SMFEM, {})
-    truth = truth_jobs(study.case, study.truth, study.base) if study.truth else {}
+    truth = truth_jobs(study.case, study.truth, study.base) if study.truth and not stored else {}
     return series, job(*study.reference), fields, truth
 
 
@@ -103,14 +112,19 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
     progress : show a progress bar over the runs (on stderr)
     """
     wall0 = time.perf_counter()
-    layout = [(study, *_jobs(study)) for study in plan]
+    stored = {study.case: stored_truth(study) for study in plan}
+    layout = [(study, *_jobs(study, stored[study.case][0] is not None)) for study in plan]
     every = [job for _, series, ref, fields, truth in layout
              for job in [*sum(series.values(), []), ref, fields, *truth.values()]]
     runs, executed, cached = run_cached(every, cache, scheduler, workers, progress)
     cases = []
     for study, series, ref, fields, truth in layout:
         truth_runs = {role: runs[j] for role, j in truth.items()}
-        made = assemble(study.case, study.truth, study.base, truth_runs) if study.truth else None
+        made, why = stored[study.case]
+        if made is None and study.truth:
+            made = assemble(study.case, study.truth, study.base, truth_runs)
+            if made is not None:
+                made.source = f"computed by this study ({why})"
         cases.append(CaseRuns(study, {s: [runs[j] for j in js] for s, js in series.items()}, runs[ref], runs[fields],
                               made, truth_runs))
     return StudyResult(cases, executed=executed, cached=cached, wall_time_s=time.perf_counter() - wall0)

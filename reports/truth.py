@@ -43,7 +43,8 @@ from runs.files import jsonable
 from .cache import Run
 from .jobs import OK, Job
 from .metrics import common_grid, smoothed
-from .plan import MODAL, MODAL_TRUTH, REF2D, REF3D, TIME_TRUTH, TruthPlan, full, quick
+from .plan import (EXPLICIT, EXPLICIT_TRUTH, MODAL, MODAL_TRUTH, REF2D, REF3D, TIME_TRUTH, TruthPlan, explicit_truth,
+                   full, quick)
 
 #: order of Newmark's average-acceleration method
 NEWMARK_ORDER = 2.0
@@ -68,6 +69,10 @@ class Truth:
     parts : probe -> its parts (``time``, ``space``, ``harmonics``, ``modes``) and the
         observed orders
     levels : the runs it is made of (solver, settings, status, CPU time)
+    key : for a stored truth, the key it was made for (:mod:`reports.stored`)
+    calibration : probe -> the distance to a second, independent truth path and that path's
+        uncertainty (:mod:`reports.calibration`); empty when not made
+    source : where it came from: computed now, or stored (and where)
     """
 
     case: str
@@ -82,6 +87,9 @@ class Truth:
     cpu_time_s: float
     window: float = 0.0
     params: dict = field(default_factory=dict)
+    key: str = ""
+    calibration: dict = field(default_factory=dict)
+    source: str = "computed"
 
     def uncertainty_of(self, probes) -> float:
         """The largest uncertainty over ``probes`` that have a converged truth (NaN if none)."""
@@ -95,7 +103,8 @@ class Truth:
         return {"case": self.case, "method": self.method, "name": self.name, "params": self.params,
                 "uncertainty": self.uncertainty, "parts": self.parts, "notes": self.notes,
                 "levels": self.levels, "cpu_time_s": self.cpu_time_s, "comparison_window_s": self.window,
-                "end_time_s": float(self.t[-1])}
+                "end_time_s": float(self.t[-1]), **({"key": self.key} if self.key else {}),
+                **({"calibration": self.calibration} if self.calibration else {})}
 
     def write(self, out: Path) -> None:
         """``history.csv`` (as ``smfem run`` writes it) and ``summary.json``."""
@@ -124,21 +133,37 @@ def reference_solver(case) -> str:
     return REF2D
 
 
+def explicit_unsupported(case) -> str | None:
+    """Why the explicit reference cannot run ``case`` (None if it can)."""
+    if case.wall is not None and case.material.plastic:
+        return "contact with plasticity"
+    if case.wall is not None and case.wall.friction > 0:
+        return "a wall with friction"
+    return None
+
+
 def plan_for(name: str, base: dict, settings: str = "quick") -> TruthPlan:
     """The truth plan of case ``name`` with overrides ``base``: the study's own where it fits
     the case as set up; else modal where the case is linear and homogeneous along x3 (the
-    unnotched elastic strip), else time-step halving on a reference that can run it (a
-    plastic variant cannot be modal)."""
+    unnotched elastic strip), else (a plastic variant cannot be modal) the explicit reference
+    for ``full`` settings where it can run the case, time-step halving otherwise, on a
+    reference that can run it (2D where the scene has a 2D form)."""
     full_ = settings == "full"
     plan = {s.case: s for s in (full() if full_ else quick())}[name].truth
     case = get_case(name, base)
     modal_ok = not modal_unsupported(case)
-    if plan.method == TIME_TRUTH and modal_ok:
+    if plan.method != MODAL_TRUTH and modal_ok:
         plan = _modal_plan(case, full_)
     elif plan.method == MODAL_TRUTH and not modal_ok:
+        plan = (explicit_truth() if full_ else
+                TruthPlan(TIME_TRUTH, refine=(1, 2), dt_divisors=(1, 2, 4)))
+    if plan.method == EXPLICIT_TRUTH and explicit_unsupported(case):
         plan = TruthPlan(TIME_TRUTH, refine=(2, 3) if full_ else (1, 2), dt_divisors=(1, 2, 4, 8) if full_ else (1, 2, 4))
+    solver = reference_solver(case)
     if plan.method == TIME_TRUTH:
-        plan = replace(plan, solver=reference_solver(case))
+        plan = replace(plan, solver=solver)
+    if plan.method == EXPLICIT_TRUTH:
+        plan = replace(plan, dim=3 if solver == REF3D else 2)
     return plan
 
 
@@ -156,6 +181,11 @@ def jobs(name: str, plan: TruthPlan, base: dict) -> dict[tuple, Job]:
     case = get_case(name, base)
     dt = case.dt
     out = {}
+    if plan.method == EXPLICIT_TRUTH:
+        sample = {"dt": dt / plan.output_divisor, "dim": plan.dim}
+        options = dict(plan.options)
+        return {(role, r): Job.make(name, plan.solver, {**base, **sample, "refine": r}, options=options)
+                for role, levels in (("space", plan.refine), ("check", plan.check)) for r in levels}
     if plan.method == MODAL_TRUTH:
         n = plan.harmonics[-1] if plan.harmonics else case.harmonics
         sample = {"dt": dt / plan.output_divisor}
@@ -241,7 +271,7 @@ def assemble(name: str, plan: TruthPlan, base: dict, runs: dict[tuple, Run]) -> 
                "cpu_time_s": r.summary["cpu_time_s"]} for k, r in runs.items()]
     unique = {r.path: r for r in runs.values()}.values()  # one run may fill two roles
     cpu = float(sum(r.summary["cpu_time_s"] for r in unique))
-    make = _modal if plan.method == MODAL_TRUTH else _time_halving
+    make = {MODAL_TRUTH: _modal, TIME_TRUTH: _time_halving, EXPLICIT_TRUTH: _explicit}[plan.method]
     t, values, parts, label = make(case, plan, runs, window)
     uncertainty, notes = {}, {}
     singular = case.references.get("singular_probes", {})
@@ -320,3 +350,41 @@ def _time_halving(case, plan, runs, window):
              f"Richardson where the order is near 2, corrected to r{fine} at dt"
              + (f" (meshes r{', r'.join(map(str, plan.refine))})" if len(plan.refine) > 2 else ""))
     return grid_b, values, parts, label
+
+
+def _explicit(case, plan, runs, window):
+    """Richardson's extrapolation of the explicit ladder's three finest meshes, checked by the
+    interleaved pair; else the finest mesh with its grid convergence index (module doc).
+
+    The step is a fixed fraction of the critical one, so it halves with the mesh: the
+    ladder's differences hold the time error too, and its order is that of both together."""
+    space = [runs["space", r] for r in plan.refine]
+    check = [runs["check", r] for r in plan.check]
+    finest = space[-1]
+    grid = finest.history["t"].to_numpy()
+    values, parts = {}, {}
+    for probe in case.probe_names:
+        q = [_on(r, probe, grid) for r in space]
+        u_fine, p = _ladder(space, [1 / r for r in plan.refine], probe, grid, window)
+        part = {"order_space": p, "space": u_fine, "estimate": "finest"}
+        values[probe] = q[-1]
+        if len(q) >= 3 and check and math.isfinite(p) and p > 0:
+            factor = 1.0 / (2**p - 1)
+            extrapolated = q[-1] + (q[-1] - q[-2]) * factor
+            c = [_on(r, probe, grid) for r in check]
+            other = c[1] + (c[1] - c[0]) * factor
+            u_rich = GCI_SAFETY * _rel(extrapolated - other, extrapolated, grid, window)
+            if u_rich < u_fine:
+                values[probe] = extrapolated
+                part.update(space=u_rich, space_finest=u_fine, estimate="Richardson",
+                            extrapolation=_rel(extrapolated - q[-1], extrapolated, grid, window))
+        if math.isfinite(p) and p <= 0:
+            part["space"] = math.nan  # finer meshes move the probe more: not converging
+        parts[probe] = part
+    p_ = finest.summary["params"]
+    options = "".join(f", {k} {v}" for k, v in plan.options)
+    label = (f"{EXPLICIT}: r{p_['refine']} ({plan.dim}D{options}), central differences at "
+             f"{finest.summary['info'].get('safety', 0.5):g} of the critical step, meshes "
+             f"r{', r'.join(map(str, plan.refine))}"
+             + (f", Richardson where the r{plan.check[0]}-r{plan.check[1]} pair confirms it" if check else ""))
+    return grid, values, parts, label

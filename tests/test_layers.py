@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-RANK = {"cli": 4, "reports": 3, "runs": 2, "smfem": 1, "reference_fem": 1, "cases": 0}
+RANK = {"cli": 4, "reports": 3, "runs": 2, "smfem": 1, "reference_fem": 1, "cases": 0, "truths": 0}
 
 
 def module_name(path: Path) -> str:

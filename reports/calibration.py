@@ -1,0 +1,77 @@
+"""Calibration of a truth: its distance to a second, independent truth path.
+
+A stored truth is made twice: by its own path (:func:`reports.truth.plan_for`, ``full``)
+and by a second one that shares as little as it can with it (the explicit reference against
+the modal solution, the B-bar element against the standard one, implicit Newmark with
+Lagrange-multiplier contact against central differences with a kinematic wall). For every
+probe with a converged truth the distance between the two, in the error measure of the
+report, is set against the two stated uncertainties:
+
+- *covered*: the distance is at most the sum of the two uncertainties (each path's error is
+  within its own bar, so the two paths are within the sum);
+- *sharp*: the truth's own uncertainty is at most :data:`SHARPNESS` times the distance, where
+  the distance is above :data:`FLOOR` (below it the two paths agree better than any
+  uncertainty is worth stating, and the rule asks nothing).
+"""
+
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+
+from cases import get_case
+from runs.errors import history_errors
+
+from .plan import EXPLICIT, EXPLICIT_TRUTH, MODAL_TRUTH, REF2D, TIME_TRUTH, TruthPlan
+
+#: the most a truth's stated uncertainty may exceed the distance to the second path
+SHARPNESS = 3.0
+#: distances below this (relative max-norm) are agreement: the sharpness rule is not applied
+FLOOR = 5e-4
+
+
+def second_plan(name: str, main: TruthPlan) -> TruthPlan:
+    """The second truth path of scene ``name`` whose main path is ``main``."""
+    ladder = dict(refine=(2, 4, 8), check=(3, 6), output_divisor=main.output_divisor)
+    if main.method == MODAL_TRUTH:  # dome, thick cylinder: the explicit 2D reference
+        return TruthPlan(EXPLICIT_TRUTH, solver=EXPLICIT, **ladder)
+    if main.method == EXPLICIT_TRUTH and get_case(name).wall is not None:
+        # the rod: implicit Newmark with exact (Lagrange multiplier) contact on a massless face
+        return TruthPlan(TIME_TRUTH, refine=(4, 8), dt_divisors=(1, 2, 4, 8), solver=REF2D)
+    if main.method == EXPLICIT_TRUTH:  # plastic scenes: the other element (B-bar or standard)
+        options = dict(main.options)
+        options["bbar"] = not options.get("bbar", False)
+        return TruthPlan(EXPLICIT_TRUTH, solver=EXPLICIT, dim=main.dim, options=tuple(sorted(options.items())),
+                         **ladder)
+    raise ValueError(f"no second truth path for a {main.method!r} truth")
+
+
+def calibrate(case, truth, second) -> dict:
+    """Per probe with a converged truth in both paths: ``distance``, ``uncertainty`` (the
+    truth's), ``second_uncertainty``, ``covered`` and ``sharp``; and ``second_path``."""
+    window = case.references.get("comparison_window_s", 0.0)
+    out = {"second_path": second.name, "rule": f"covered: distance <= u + u2; sharp: u <= {SHARPNESS:g} "
+                                              f"max(distance, {100 * FLOOR:g} %)", "probes": {}}
+    for probe in case.probe_names:
+        u, u2 = truth.uncertainty.get(probe, math.nan), second.uncertainty.get(probe, math.nan)
+        if not (math.isfinite(u) and math.isfinite(u2)) or probe.startswith("peps"):
+            continue
+        distance = history_errors(second.t, second.values[probe], truth.t, truth.values[probe], window)[0]
+        out["probes"][probe] = {
+            "distance": distance, "uncertainty": u, "second_uncertainty": u2,
+            "covered": bool(distance <= u + u2), "sharp": bool(u <= SHARPNESS * max(distance, FLOOR))}
+    return out
+
+
+def table(truths: dict) -> pd.DataFrame:
+    """One row per case and probe of every truth (``name -> Truth``) with a calibration."""
+    rows = []
+    for name, truth in truths.items():
+        cal = truth.calibration or {}
+        for probe, c in cal.get("probes", {}).items():
+            rows.append({"case": name, "probe": probe, "truth": truth.name, "second_path": cal["second_path"],
+                         "uncertainty_pct": 100 * c["uncertainty"],
+                         "second_uncertainty_pct": 100 * c["second_uncertainty"],
+                         "distance_pct": 100 * c["distance"], "covered": c["covered"], "sharp": c["sharp"]})
+    return pd.DataFrame(rows)
