@@ -3,9 +3,13 @@
 Implicit Newmark on a plastic scene under a step load converges in time at order 0.5 ... 0.85
 in the max-norm, so a time-step ladder leaves its own time error as the largest part of a
 truth's uncertainty. Central differences at a fraction of the critical step ``2 / omega_max``
-leave a time error far below the space error (a step is many times shorter than any period
-the mesh resolves), and a step costs a sparse product and a radial return, with no
-factorization and no Newton iteration, so the mesh ladder can go finer.
+leave a time error below the space error, and one that shrinks with it: the step is tied to
+the mesh (h / c), so the time error falls as h^2 down a mesh ladder and the ladder's
+extrapolation takes it along. Measured on the elastic thick cylinder (r1, against the exact
+modal response of the same matrices): 0.19-0.36 % at half the critical step, the accumulated
+phase error of the low modes over 6 periods; 0.03-0.08 % at a quarter of it (the step of
+r4), 0.01-0.03 % at an eighth (r8). A step costs a sparse product and a radial return,
+with no factorization and no Newton iteration, so the mesh ladder can go finer.
 
 Scheme (velocity form; Belytschko, Liu & Moran, *Nonlinear Finite Elements*, box 6.1)::
 
@@ -68,14 +72,14 @@ def critical_step(omega_max: float) -> float:
 
 
 class ExplicitSystem:
-    """Internal forces, state and contact of a model with a lumped mass, on the free dofs.
+    """Internal forces, material state and the wall of a model with a lumped mass, on the
+    free dofs.
 
     Attributes
     ----------
     m : (n_free,) lumped mass
-    sigma : (n_qp, nc) stress of the last committed state (Mandel, mesh frame)
+    sigma : (n_qp, nc) stress of the last state (Mandel, mesh frame)
     peps : (n_qp,) equivalent plastic strain
-    contact_force : (n_free,) the wall's force of the last step (zero without a wall)
     """
 
     def __init__(self, model: Model):
@@ -93,7 +97,6 @@ class ExplicitSystem:
         self._u = np.zeros(free.size)
         self._sigma_of = None  # the u that _sigma belongs to, for elastic runs (computed lazily)
         self.wall = _Wall(model) if model.case.wall is not None else None
-        self.contact_force = np.zeros(free.size)
 
     @property
     def sigma(self) -> np.ndarray:
@@ -127,8 +130,8 @@ class ExplicitSystem:
         return self.BT @ (ret.sigma * model.weights[:, None]).ravel()
 
     def constrain(self, u_new: np.ndarray) -> np.ndarray:
-        """``u_new`` with the face nodes that went through the wall put back on it (the
-        correction, zero without a wall)."""
+        """The correction that puts the face nodes of ``u_new`` that went through the wall back
+        on it (zero without a wall)."""
         if self.wall is None:
             return np.zeros_like(u_new)
         return self.wall.correction(u_new)
@@ -170,23 +173,24 @@ def march(system: ExplicitSystem, Q: np.ndarray, v0: np.ndarray, dt: float, n_st
           ) -> Iterator[tuple[int, float, np.ndarray, np.ndarray, np.ndarray]]:
     """Yield ``(n, t_n, u_n, v_n, a_n)`` for n = 0 .. ``n_steps`` (free dofs; from rest in
     displacement, at velocity ``v0``). ``a_n`` includes the wall's force, known only once
-    ``u_n+1`` is predicted, so step n is yielded after that prediction."""
+    ``u_n+1`` is predicted, so step n is yielded after that prediction; at t = 0 it is the
+    initial acceleration ``M a_0 = Q - f_int(u_0)`` (the initial state every solver reports:
+    the wall's force acts from the first step on)."""
     u = np.zeros_like(v0)
-    v_half = None
     for n in range(n_steps + 1):
         a = (Q - system.internal_forces(u)) / system.m
-        if v_half is None:  # the first half step: u_1 = u_0 + dt v_0 + dt^2 / 2 a_0
+        if n == 0:  # the first half step: u_1 = u_0 + dt v_0 + dt^2 / 2 a_0
             u_new = u + dt * v0 + 0.5 * dt * dt * a
             du = system.constrain(u_new)
-            a = a + 2.0 * du / (dt * dt)
-            v = v0
+            yield n, 0.0, u, v0, a
+            v_half = v0 + 0.5 * dt * (a + 2.0 * du / (dt * dt))
         else:
             u_new = u + dt * (v_half + dt * a)
             du = system.constrain(u_new)
             a = a + du / (dt * dt)
             v = v_half + 0.5 * dt * a
-        yield n, n * dt, u, v, a
-        v_half = v + 0.5 * dt * a
+            yield n, n * dt, u, v, a
+            v_half = v + 0.5 * dt * a
         u = u_new + du
 
 
