@@ -10,8 +10,14 @@ report, is set against the two stated uncertainties:
 - *covered*: the distance is at most the sum of the two uncertainties (each path's error is
   within its own bar, so the two paths are within the sum);
 - *sharp*: the truth's own uncertainty is at most :data:`SHARPNESS` times the distance, where
-  the distance is above :data:`FLOOR` (below it the two paths agree better than any
-  uncertainty is worth stating, and the rule asks nothing).
+  the distance is above :data:`FLOOR`. The floor is where sharpness stops mattering to the
+  report: a truth judges a target only from :data:`~reports.metrics.TRUTH_MARGIN` times its
+  uncertainty up, so an uncertainty of at most ``SHARPNESS * FLOOR`` judges the smallest
+  target; below the floor two paths agree as well as the report can use.
+
+Two paths that share a mesh ladder and an integrator (the B-bar and standard elements of the
+notched scenes) share part of their error, so their distance is a lower bound of it; the
+interleaved pair of the explicit method (:mod:`reports.truth`) measures the ladder's part.
 """
 
 from __future__ import annotations
@@ -23,12 +29,14 @@ import pandas as pd
 from cases import get_case
 from runs.errors import history_errors
 
+from .metrics import TARGETS, TRUTH_MARGIN
 from .plan import EXPLICIT, EXPLICIT_TRUTH, MODAL_TRUTH, REF2D, TIME_TRUTH, TruthPlan
 
 #: the most a truth's stated uncertainty may exceed the distance to the second path
 SHARPNESS = 3.0
 #: distances below this (relative max-norm) are agreement: the sharpness rule is not applied
-FLOOR = 5e-4
+#: (module doc: 1 % / (3 x 3), about 0.11 %)
+FLOOR = min(TARGETS) / (TRUTH_MARGIN * SHARPNESS)
 
 
 def second_plan(name: str, main: TruthPlan) -> TruthPlan:
@@ -52,7 +60,7 @@ def calibrate(case, truth, second) -> dict:
     truth's), ``second_uncertainty``, ``covered`` and ``sharp``; and ``second_path``."""
     window = case.references.get("comparison_window_s", 0.0)
     out = {"second_path": second.name, "rule": f"covered: distance <= u + u2; sharp: u <= {SHARPNESS:g} "
-                                              f"max(distance, {100 * FLOOR:g} %)", "probes": {}}
+                                              f"max(distance, {100 * FLOOR:.3g} %)", "probes": {}}
     for probe in case.probe_names:
         u, u2 = truth.uncertainty.get(probe, math.nan), second.uncertainty.get(probe, math.nan)
         if not (math.isfinite(u) and math.isfinite(u2)) or probe.startswith("peps"):
