@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .analysis import CaseAnalysis  # noqa: E402
-from .metrics import TARGETS, TRUTH_MARGIN  # noqa: E402
+from .metrics import TARGETS, TRUTH_MARGIN, smoothed  # noqa: E402
 from .plan import CALCULIX, REF2D, REF3D, SMFEM  # noqa: E402
 from .references import published_points, theory_curves  # noqa: E402
 
@@ -99,22 +99,26 @@ def _most_accurate(an: CaseAnalysis, solver: str, runs):
 
 
 def histories(an: CaseAnalysis, path: Path) -> Path:
-    """Each probe over time: the truth, each solver's most accurate run, published points, theory."""
+    """Each probe over time: the truth, each solver's most accurate run, published points, theory;
+    where the case compares through a window (the rod), every curve as the comparison sees it."""
     probes = an.case.probe_names
     fig, axes = plt.subplots(len(probes), 1, figsize=(6.4, 2.3 * len(probes) + 0.6), sharex=True, squeeze=False)
     theory = theory_curves(an.case)
+    window = an.case.references.get("comparison_window_s", 0.0)
+    seen = lambda t, x: smoothed(np.asarray(x, float), np.asarray(t, float), window)
     for ax, probe in zip(axes[:, 0], probes):
         truth = an.truth
         if truth is not None and probe in truth.values:
             note = "" if truth.converged(probe) else " (no converged truth)"
-            ax.plot(1e3 * truth.t, truth.values[probe], color="k", lw=2.2, alpha=0.35, label=f"truth{note}")
+            ax.plot(1e3 * truth.t, seen(truth.t, truth.values[probe]), color="k", lw=2.2, alpha=0.35,
+                    label=f"truth{note}")
         if theory is not None and probe in theory.values:
-            ax.plot(1e3 * theory.t, theory.values[probe], color="0.3", ls="--", lw=1, label=theory.name)
+            ax.plot(1e3 * theory.t, seen(theory.t, theory.values[probe]), color="0.3", ls="--", lw=1, label=theory.name)
         for solver, runs in an.runs.series.items():
             run = _most_accurate(an, solver, runs)
             if run is not None:
                 h = run.history
-                ax.plot(1e3 * h["t"], h[probe], color=STYLE[solver]["color"], lw=1,
+                ax.plot(1e3 * h["t"], seen(h["t"], h[probe]), color=STYLE[solver]["color"], lw=1,
                         label=f"{LABEL[solver]} {run.label}")
         for pp in (p for p in published_points(an.case) if p.probe == probe):
             t, v = np.array([pt for pt in pp.points if pt[0] <= an.case.t_end]).reshape(-1, 2).T
@@ -123,7 +127,8 @@ def histories(an: CaseAnalysis, path: Path) -> Path:
         ax.grid(True, lw=0.3, alpha=0.5)
         ax.legend(fontsize=6.5, loc="best")
     axes[-1, 0].set_xlabel("t, ms")
-    fig.suptitle(f"{an.case.name}: probe histories", fontsize=10)
+    fig.suptitle(f"{an.case.name}: probe histories"
+                 + (f", through a {1e6 * window:.3g} us window as compared" if window else ""), fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -16,7 +16,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from .analysis import HEADLINE_MEASURE, CaseAnalysis
+from .analysis import FAMILIES, HEADLINE_MEASURE, CaseAnalysis
+from .calibration import FLOOR, SHARPNESS
 from .cache import code_version
 from .metrics import TARGETS, TRUTH_MARGIN
 from .plan import SMFEM
@@ -82,7 +83,9 @@ def overview(ctx: ReportContext) -> list[Section]:
           "solver, in 2D (plane strain or axisymmetric) and in full 3D, and against CalculiX (where ccx is "
           "installed) on the reference's mesh, on every verification case. "
           "Every run is what 'smfem run' does with the parameters shown. Errors are total errors, against a "
-          "truth per case converged in mesh, harmonics and time, with its own uncertainty ('smfem truth'); "
+          "truth per case converged in mesh, harmonics and time, with its own uncertainty ('smfem truth'; "
+          "the scenes at their own parameters use the truths stored in truths/, made once by "
+          "'smfem truth CASE --full' and calibrated against a second, independent path); "
           "each solver's series spans the mesh and the time step, so its work-precision front answers "
           "'how close to the true solution, for what cost'. The paper's question, the difference between "
           "solvers at one shared time step (the spatial discretization only), is answered beside it."),
@@ -110,7 +113,7 @@ HEADLINE_COLUMNS = {"truth_uncertainty_pct": "truth uncertainty, %", "best_error
 
 def headline(ctx: ReportContext) -> list[Section]:
     names = " and ".join(f"{100 * t:g} %" for t in TARGETS)
-    return [Section("headline", f"Headline: CPU time to {names} total error", [
+    blocks = [
         p(f"Error measure: {HEADLINE_MEASURE}, against the case's truth (named in each row, with its "
           "uncertainty in the same measure). The CPU time is that of the cheapest run whose error is "
           "within the target, with its settings; 'not reached' gives the best error. A target below "
@@ -119,9 +122,29 @@ def headline(ctx: ReportContext) -> list[Section]:
           "solver does not reach it even at its dearest run, '<' when SMFEM does not). CPU time is the "
           "solve's process time (model building, factorization, time stepping), one thread."),
         table(ctx.tables["headline"].drop(columns=["truth"]).rename(columns=HEADLINE_COLUMNS)),
-        p("Truths: " + "; ".join(f"{an.case.name}: {an.truth.name}" for an in ctx.analyses if an.truth is not None)
-          + "."),
-    ])]
+        p("Truths: " + "; ".join(f"{an.case.name}: {an.truth.name} ({an.truth.source})" for an in ctx.analyses
+                                 if an.truth is not None) + "."),
+    ]
+    families = ctx.tables.get("stresses")
+    if families is not None and len(families):
+        targets = "; ".join(f"{f}: " + " and ".join(f"{100 * t:g} %" for t in ts) for f, (_, ts) in FAMILIES.items())
+        blocks += [h("Stresses and plastic strains, with their own targets"),
+                   p(f"The same columns for the probes outside the headline measure, each family judged on its own "
+                     f"(max over its probes of the relative max-norm error) and against its own targets ({targets}): "
+                     "a stress at a wave front or a plastic strain at a yielding point converges more slowly than "
+                     "a displacement."),
+                   table(families.rename(columns=_cost_labels(families)))]
+    return [Section("headline", f"Headline: CPU time to {names} total error", blocks)]
+
+
+def _cost_labels(df: pd.DataFrame) -> dict:
+    """Readable names of a costs table's columns (any targets)."""
+    out = {"truth_uncertainty_pct": "truth uncertainty, %", "best_error_pct": "best total error, %"}
+    for column in df.columns:
+        for prefix, text in (("cpu_s_to_", "CPU s to {} (settings)"), ("smfem_speedup_", "SMFEM speed-up at {}")):
+            if column.startswith(prefix):
+                out[column] = text.format(column[len(prefix):].replace("pct", " %"))
+    return out
 
 
 def _levels_table(an: CaseAnalysis) -> pd.DataFrame:
@@ -143,9 +166,20 @@ def _truth_blocks(an: CaseAnalysis) -> list:
     if t is None:
         return [p("No truth: " + ("no truth plan" if an.runs.study.truth is None else
                                   "a run it needs has no history") + ".")]
-    df = truth_table([an]).drop(columns=["case", "method", "truth", "cpu_time_s"])
-    return [h("Truth"), p(f"{t.name}. CPU time {t.cpu_time_s:.3g} s over {len(t.levels)} runs. Uncertainty in the "
-                          f"headline measure: {100 * an.truth_uncertainty:.2g} %."), table(df)]
+    df = truth_table([an]).drop(columns=["case", "method", "truth", "source", "cpu_time_s"])
+    blocks = [h("Truth"), p(f"{t.name}; {t.source}. CPU time {t.cpu_time_s:.3g} s over {len(t.levels)} runs. "
+                            f"Uncertainty in the headline measure: {100 * an.truth_uncertainty:.2g} %."), table(df)]
+    cal = (t.calibration or {}).get("probes")
+    if cal:
+        rows = pd.DataFrame([{"probe": probe, "uncertainty, %": 100 * c["uncertainty"],
+                              "second path's uncertainty, %": 100 * c["second_uncertainty"],
+                              "distance, %": 100 * c["distance"], "covered": c["covered"], "sharp": c["sharp"]}
+                             for probe, c in cal.items()])
+        blocks += [p(f"Calibration: the same truth made on a second, independent path ({t.calibration['second_path']}). "
+                     f"Covered: the distance between the two is within the sum of their uncertainties; sharp: the "
+                     f"truth's uncertainty is at most {SHARPNESS:g} times the distance (or {100 * FLOOR:.3g} %)."),
+                   table(rows)]
+    return blocks
 
 
 def _case(ctx: ReportContext, an: CaseAnalysis) -> Section:
@@ -201,18 +235,29 @@ def methods(ctx: ReportContext) -> list[Section]:
         "truncation from a ladder of three harmonic counts, each by the observed order of the three levels "
         "(grid convergence index 1.25 |q_h - q_2h| / (2^p - 1), p at most 2), plus the modes left out of the "
         "largest harmonics.",
-        "Truth, nonlinear scenes (plastic, contact) and cut-outs: the reference FEM at three halvings of the "
-        "time step; Richardson's extrapolation where the observed order is within 0.5 of 2 (uncertainty: its "
-        "change from the coarser pair), else the finest level (uncertainty: the difference of the two "
-        "finest); a finer mesh at the case's time step corrects for the mesh, and its difference is counted "
-        "in full. A probe on a singular point (a re-entrant corner) has no converged truth and is left out.",
+        "Truth, plastic and contact scenes (notched cylinder, notched strip, rod): the reference's mesh and "
+        "quadratic element integrated by central differences on an HRZ-lumped mass at half the critical step "
+        "2 / omega_max (the step halves with the mesh, so space and time converge together; radial return at "
+        "every step; the rod's wall a kinematic constraint), over meshes r2, r4, r8. Richardson's extrapolation "
+        "at the ladder's observed order is the truth where the interleaved pair r3, r6, extrapolated at the same "
+        "order, confirms it (uncertainty: 1.25 times the distance between the two extrapolations), else the "
+        "finest mesh with its grid convergence index. The notched scenes use the B-bar form of the element (the "
+        "volumetric strain projected on {1, x, y} per element, free of locking under plastic flow).",
+        "Stored truths: 'smfem truth CASE --full' makes a scene's truth at its own parameters once (tens of "
+        "minutes to hours) and keeps it in truths/CASE, keyed by a hash of the case's definition and the truth "
+        "method; a report uses it while the key matches and otherwise computes a quick truth (the same modal "
+        "method on coarser ladders, or the 2D reference at three halvings of the time step with a mesh "
+        "correction) and says so. Each stored truth is calibrated against a second, independent path (the "
+        "explicit reference for a modal truth, the other element for the notched scenes, implicit Newmark with "
+        "Lagrange-multiplier contact for the rod).",
         "Same-dt comparison (the paper's): runs at the case's time step against the finest reference run "
         "at that time step, or an analytic history where it is exact (the 1-D rod theory for nu = 0).",
         "Published extrema: the computed extremum of the same kind between the midpoints to the "
         "neighbouring published times.",
-        "rod_impact: every history is seen through a moving average over 2R/c (the time a wave takes "
-        "to cross the rod's diameter) before it is compared, truth uncertainties included: the ringing "
-        "behind the wave front is mesh-dependent in both solvers.",
+        "rod_impact: every history is seen through a triangular window 2R/c wide (two moving averages R/c "
+        "long; 2R/c is the time a wave takes to cross the rod's diameter), each on its own time grid, before "
+        "it is compared, truth uncertainties included: the ringing behind the wave front is mesh-dependent in "
+        "every model.",
         "CalculiX (ccx, one thread): one run per case at the case's settings in 2D, on the reference FEM's "
         "mesh with serendipity elements (CPE8 / CAX8), from the deck 'smfem export' writes; Newmark with "
         "ALPHA = 0 at the case's dt (plastic scenes: ccx's own increments of at most dt, interpolated onto "

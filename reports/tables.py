@@ -8,7 +8,9 @@ from pathlib import Path
 import pandas as pd
 
 from . import metrics
-from .analysis import HEADLINE_MEASURE, CaseAnalysis
+from .analysis import FAMILIES, HEADLINE_MEASURE, CaseAnalysis
+from .calibration import FLOOR, SHARPNESS
+from .calibration import table as calibration_table
 from .jobs import NOT_INSTALLED, OK
 from .plan import SMFEM
 from .truth import PARTS
@@ -36,12 +38,32 @@ def runs_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | None) -> dict:
+    """CPU time to each target (with its settings) and SMFEM's speed-up there."""
+    row = {}
+    for target, cost in costs.items():
+        if s.status != OK:
+            text = f"not available: {s.message}"
+        elif an.truth is None:
+            text = "no truth"
+        else:
+            text = cost.text()
+        row[f"cpu_s_to_{_pct(target)}"] = text
+    for target, cost in costs.items():
+        speed = ""
+        if solver != SMFEM and s.status == OK and mine is not None:
+            speed = metrics.speedup(cost, mine[target])
+        row[f"smfem_speedup_{_pct(target)}"] = speed
+    return row
+
+
 def headline_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     """Per case and solver: the truth and its uncertainty, the best total error, the CPU time
     (and settings) of the cheapest run reaching each target, and SMFEM's speed-up there."""
     rows = []
     for an in analyses:
         mine = an.solvers.get(SMFEM)
+        mine = mine.costs if mine is not None and mine.status == OK else None
         truth = an.truth.name if an.truth is not None else "none available"
         for solver, s in an.solvers.items():
             if s.status == NOT_INSTALLED:  # named in the case's section, not a row
@@ -49,20 +71,29 @@ def headline_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
             row = {"case": an.case.name, "solver": solver, "truth": truth,
                    "truth_uncertainty_pct": 100 * an.truth_uncertainty, "runs": len(s.points),
                    "best_error_pct": 100 * s.points.total.min() if s.status == OK and len(s.points) else math.nan}
-            for target, cost in s.costs.items():
-                if s.status != OK:
-                    text = f"not available: {s.message}"
-                elif an.truth is None:
-                    text = "no truth"
-                else:
-                    text = cost.text()
-                row[f"cpu_s_to_{_pct(target)}"] = text
-            for target, cost in s.costs.items():
-                speed = ""
-                if solver != SMFEM and s.status == OK and mine is not None and mine.status == OK:
-                    speed = metrics.speedup(cost, mine.costs[target])
-                row[f"smfem_speedup_{_pct(target)}"] = speed
-            rows.append(row)
+            rows.append(row | _cost_columns(an, solver, s, s.costs, mine))
+    return pd.DataFrame(rows)
+
+
+def families_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
+    """The headline's columns for the probes outside it (:data:`reports.analysis.FAMILIES`:
+    stresses, plastic strains), each with its own targets, per case that has such probes."""
+    rows = []
+    for an in analyses:
+        for family in FAMILIES:
+            probes = an.probes_of(family)
+            if not probes:
+                continue
+            mine = an.solvers.get(SMFEM)
+            mine = mine.family_costs[family] if mine is not None and mine.status == OK else None
+            for solver, s in an.solvers.items():
+                if s.status == NOT_INSTALLED:
+                    continue
+                errors = s.points[family] if s.status == OK and len(s.points) else pd.Series(dtype=float)
+                row = {"case": an.case.name, "family": family, "probes": " ".join(probes), "solver": solver,
+                       "truth_uncertainty_pct": 100 * an.uncertainty_of(family),
+                       "best_error_pct": 100 * errors.min() if errors.notna().any() else math.nan}
+                rows.append(row | _cost_columns(an, solver, s, s.family_costs[family], mine))
     return pd.DataFrame(rows)
 
 
@@ -91,7 +122,7 @@ def truth_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
         for probe in an.case.probe_names:
             parts = t.parts.get(probe, {})
             rows.append({"case": an.case.name, "probe": probe, "method": t.method, "truth": t.name,
-                         "uncertainty_pct": 100 * t.uncertainty[probe],
+                         "source": t.source, "uncertainty_pct": 100 * t.uncertainty[probe],
                          **{f"{k}_pct": 100 * parts[k] for k in PARTS if k in parts},
                          **{k: v for k, v in parts.items() if k.startswith("order") or k.endswith("estimate")},
                          "note": t.notes.get(probe, ""), "cpu_time_s": t.cpu_time_s})
@@ -103,7 +134,9 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
     out.mkdir(parents=True, exist_ok=True)
     tables = {
         "headline": headline_table(analyses),
+        "stresses": families_table(analyses),
         "truth": truth_table(analyses),
+        "calibration": calibration_table({an.case.name: an.truth for an in analyses if an.truth is not None}),
         "spatial": spatial_table(analyses),
         "runs": runs_table(analyses),
         "errors": pd.concat([an.errors for an in analyses], ignore_index=True),
@@ -117,7 +150,13 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         f"headline.csv: per case and solver, CPU time (s) of the cheapest run within {targets} total error\n"
         "  against the case's truth, its settings, and SMFEM's speed-up\n"
         f"  error measure: {HEADLINE_MEASURE}\n"
-        "truth.csv: per case and probe, how the truth was made and its uncertainty (relative max-norm)\n"
+        "stresses.csv: the same for the stress and plastic-strain probes (family), each family with its own\n"
+        f"  targets ({'; '.join(f'{f}: ' + ' and '.join(f'{100 * t:g} %' for t in ts) for f, (_, ts) in FAMILIES.items())})\n"
+        "truth.csv: per case and probe, how the truth was made, where it came from (stored or computed)\n"
+        "  and its uncertainty (relative max-norm)\n"
+        "calibration.csv: per stored truth and probe, the distance to a second, independent truth path and\n"
+        f"  both uncertainties (covered: distance <= u + u2; sharp: u <= {SHARPNESS:g} max(distance, "
+        f"{100 * FLOOR:.3g} %))\n"
         "spatial.csv: runs at the case's time step against the finest reference run at that time step\n"
         "errors.csv: per run and probe, relative max-norm and L2 errors (kind: total, spatial, published)\n"
         "orders.csv: observed orders (log-log fit of the headline measure against dt or the mesh)\n"
