@@ -334,3 +334,129 @@ def test_plastic_thick_cylinder_truth_uncertainty_covers_a_much_finer_run(tmp_pa
         assert 0 < part["time"] < 0.2 and part["order_time"] < 1.5 and part["time_estimate"] == "finest"
         left = np.abs(np.interp(truth.t, fine.t, fine[probe]) - truth.values[probe]).max() / np.abs(fine[probe]).max()
         assert left < part["time"], (probe, left, part)
+
+
+# -- the explicit truth --------------------------------------------------------------------------
+def test_explicit_truth_extrapolates_where_the_interleaved_pair_confirms_it():
+    """Histories with a mesh error C h^p (h = 1 / refine): Richardson over r2, r4, r8 at the
+    observed order recovers the exact history, and the r3-r6 pair, extrapolated at the same
+    order, lands on it too, so the uncertainty is tiny; an error that is not a power of h
+    (the pair disagrees) leaves the finest mesh and its grid convergence index."""
+    from reports.plan import explicit_truth
+
+    plan = explicit_truth(bbar=True)
+    exact = lambda t: np.sin(300 * t) - 0.01
+    for p, check_shift in ((1.3, 0.0), (1.3, 0.05)):
+        shifted = lambda r: check_shift if r in plan.check else 0.0
+        runs = _synthetic_runs("notched_cylinder", plan, {},
+                               lambda t, dt, r: exact(t) + (0.05 / r**p + shifted(r)) * np.cos(500 * t))
+        truth = assemble("notched_cylinder", plan, {}, runs)
+        part = truth.parts["E_ur"]
+        assert part["order_space"] == pytest.approx(p, abs=1e-6)
+        error = np.abs(truth.values["E_ur"] - exact(truth.t)).max() / np.abs(exact(truth.t)).max()
+        if not check_shift:
+            assert part["estimate"] == "Richardson" and error < 1e-9 and truth.uncertainty["E_ur"] < 1e-9
+        else:
+            assert part["estimate"] == "finest" and error < truth.uncertainty["E_ur"] < 3 * error
+
+
+def test_explicit_plans_and_their_second_paths():
+    from reports.calibration import second_plan
+
+    for name in ("notched_cylinder", "notched_strip", "rod_impact"):
+        plan = plan_for(name, {}, "full")
+        assert plan.method == "explicit" and plan.refine == (2, 4, 8) and plan.check == (3, 6) and plan.dim == 2
+    assert dict(plan_for("notched_cylinder", {}, "full").options) == {"bbar": True}
+    assert dict(second_plan("notched_cylinder", plan_for("notched_cylinder", {}, "full")).options) == {"bbar": False}
+    assert second_plan("rod_impact", plan_for("rod_impact", {}, "full")).method == TIME_TRUTH
+    assert second_plan("dome", plan_for("dome", {}, "full")).method == "explicit"
+    assert plan_for("rod_impact", {"friction": 0.3}, "full").method == TIME_TRUTH  # the explicit wall is frictionless
+
+
+# -- stored truths ---------------------------------------------------------------------------------
+SCENES = ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact")
+
+
+def _stored(name):
+    from reports import stored
+
+    return stored.read(stored.directory(name))
+
+
+def test_a_truths_key_follows_the_case_and_the_method():
+    from reports.stored import key_of
+
+    case, plan = get_case("notched_cylinder"), plan_for("notched_cylinder", {}, "full")
+    assert key_of(case, plan) == key_of(get_case("notched_cylinder"), plan_for("notched_cylinder", {}, "full"))
+    assert key_of(get_case("notched_cylinder", {"q": 0.7e8}), plan) != key_of(case, plan)
+    assert key_of(case, plan_for("notched_cylinder", {}, "quick")) != key_of(case, plan)
+    # the words about a case are not the case: its title does not change the key
+    from dataclasses import replace
+
+    assert key_of(replace(case, title="another title"), plan) == key_of(case, plan)
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_stored_truth_key_matches_its_case(name):
+    """A stored truth stands only for the case and method it was made for: when a scene or the
+    truth method changes, this fails until ``smfem truth NAME --full`` is run again."""
+    import json
+
+    from reports.stored import directory, key_of
+
+    summary = json.loads((directory(name) / "summary.json").read_text())
+    assert summary["key"] == key_of(get_case(name), plan_for(name, {}, "full")), (
+        f"truths/{name} no longer matches its case: run 'smfem truth {name} --full'")
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_stored_truth_is_sharp_enough_to_judge_its_scene(name):
+    """0.3 % on every displacement and velocity probe, 1 % on the rod's stresses through its
+    window; probes on singular points say why they have no truth."""
+    truth = _stored(name)
+    case = get_case(name)
+    singular = case.references.get("singular_probes", {})
+    for probe in case.probes:
+        u = truth.uncertainty[probe.name]
+        if probe.name in singular:
+            assert math.isnan(u) and truth.notes[probe.name].startswith("no converged truth")
+        elif probe.field in ("u", "v"):
+            assert u <= 3e-3, (probe.name, u)
+        elif probe.field == "sigma":
+            assert u <= 1e-2, (probe.name, u)
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_calibration_of_the_stored_truth(name):
+    """The distance to the second path, recomputed from the two stored histories, is the one
+    recorded; every probe's uncertainty covers it (with the second path's) and is at most three
+    times it where it is above the floor."""
+    from reports import stored
+    from reports.calibration import FLOOR, SHARPNESS
+    from runs.errors import history_errors
+
+    truth, second = _stored(name), stored.read(stored.directory(name) / "second")
+    window = get_case(name).references.get("comparison_window_s", 0.0)
+    assert truth.calibration["probes"], "no probe calibrated"
+    for probe, c in truth.calibration["probes"].items():
+        d = history_errors(second.t, second.values[probe], truth.t, truth.values[probe], window)[0]
+        assert d == pytest.approx(c["distance"], rel=1e-6, abs=1e-12)
+        assert d <= truth.uncertainty[probe] + second.uncertainty[probe], (probe, c)
+        assert truth.uncertainty[probe] <= SHARPNESS * max(d, FLOOR), (probe, c)
+
+
+@pytest.mark.slow
+def test_explicit_plastic_thick_cylinder_agrees_with_the_implicit_ladder(tmp_path):
+    """The two truth engines on the plastic thick cylinder (half the window): the explicit
+    reference over r1, r2, r4 against the implicit time-step ladder (r1 at dt, dt/2, dt/4, the
+    r2 mesh correcting it): within the sum of their stated uncertainties."""
+    from reports.calibration import calibrate
+    from reports.plan import EXPLICIT, EXPLICIT_TRUTH
+
+    base = {"plastic": True, "t_end": 2e-3}
+    explicit = make_truth("thick_cylinder", base, TruthPlan(EXPLICIT_TRUTH, refine=(1, 2, 4), solver=EXPLICIT,
+                                                             output_divisor=4), tmp_path)
+    implicit = make_truth("thick_cylinder", base, TruthPlan(TIME_TRUTH, refine=(1, 2)), tmp_path)
+    cal = calibrate(get_case("thick_cylinder", base), explicit, implicit)["probes"]
+    for probe in ("A_ur", "B_ut", "C_ur"):
+        assert cal[probe]["covered"], (probe, cal[probe])
