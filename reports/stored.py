@@ -55,7 +55,16 @@ def read(path: Path) -> Truth:
                  summary["uncertainty"], summary["parts"], summary["notes"], summary["levels"],
                  summary["cpu_time_s"], summary.get("comparison_window_s", 0.0), params=summary.get("params", {}),
                  key=summary.get("key", ""), calibration=summary.get("calibration", {}),
-                 source=f"stored in {path} (key {summary.get('key', '')})")
+                 source=f"stored in {_shown(path)} (key {summary.get('key', '')})")
+
+
+def _shown(path: Path) -> str:
+    """``truths/CASE`` for a stored truth of the package (the reader's repository, not this
+    machine's path); other directories as given."""
+    try:
+        return str(Path(ROOT.name) / Path(path).resolve().relative_to(ROOT))
+    except ValueError:
+        return str(path)
 
 
 def _numbers(x):

@@ -38,14 +38,17 @@ def runs_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | None) -> dict:
-    """CPU time to each target (with its settings) and SMFEM's speed-up there."""
+def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | None,
+                  no_truth: str = "no truth") -> dict:
+    """CPU time to each target (with its settings) and SMFEM's speed-up there; ``no_truth``
+    where the probes have none."""
     row = {}
+    judged = an.truth is not None and no_truth == "no truth"
     for target, cost in costs.items():
         if s.status != OK:
             text = f"not available: {s.message}"
-        elif an.truth is None:
-            text = "no truth"
+        elif not judged:
+            text = no_truth
         else:
             text = cost.text()
         row[f"cpu_s_to_{_pct(target)}"] = text
@@ -86,14 +89,17 @@ def families_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
                 continue
             mine = an.solvers.get(SMFEM)
             mine = mine.family_costs[family] if mine is not None and mine.status == OK else None
+            u = an.uncertainty_of(family)
+            no_truth = "no truth" if math.isfinite(u) or an.truth is None else \
+                "no converged truth: singular probes (truth.csv says why)"
             for solver, s in an.solvers.items():
                 if s.status == NOT_INSTALLED:
                     continue
                 errors = s.points[family] if s.status == OK and len(s.points) else pd.Series(dtype=float)
                 row = {"case": an.case.name, "family": family, "probes": " ".join(probes), "solver": solver,
-                       "truth_uncertainty_pct": 100 * an.uncertainty_of(family),
+                       "truth_uncertainty_pct": 100 * u,
                        "best_error_pct": 100 * errors.min() if errors.notna().any() else math.nan}
-                rows.append(row | _cost_columns(an, solver, s, s.family_costs[family], mine))
+                rows.append(row | _cost_columns(an, solver, s, s.family_costs[family], mine, no_truth))
     return pd.DataFrame(rows)
 
 

@@ -15,9 +15,8 @@ from reports import metrics
 from reports.analysis import analyse
 from reports.build import build
 from reports.cache import Run, RunCache
-from reports.cache import RunCache
 from reports.jobs import NOT_AVAILABLE, NOT_INSTALLED, Job, execute
-from reports.plan import CALCULIX, MODAL_TRUTH, REF2D, REF3D, SMFEM, CaseStudy, Series, TruthPlan, grid, quick
+from reports.plan import CALCULIX, MODAL_TRUTH, REF2D, REF3D, SMFEM, TIME_TRUTH, CaseStudy, Series, TruthPlan, grid, quick
 from reports.references import rod_histories
 from reports.study import CaseRuns
 from reports.tables import headline_table
@@ -94,6 +93,27 @@ def test_the_headline_is_the_cheapest_run_within_each_target_of_the_truth(tiny):
     tc = head.loc["thick_cylinder"]
     assert (tc["cpu_s_to_1pct"] == "truth not fine enough").all() and (tc["cpu_s_to_5pct"] == "truth not fine enough").all()
     assert head.loc[("dome", SMFEM), "cpu_s_to_5pct"].endswith(")")  # reached, with its settings
+
+
+def test_stresses_have_their_own_table_and_stay_out_of_the_headline(tmp_path):
+    """The rod over a short window: the headline's error is over its displacement and velocity
+    probes only; its stresses are in stresses.csv against their own targets, 5 % and 10 %."""
+    study = CaseStudy("rod_impact", (Series(SMFEM, ({"refine": 1},)), Series(REF2D, ({"refine": 1},))),
+                      reference=(REF2D, {"refine": 2}), base={"t_end": 1e-4},
+                      truth=TruthPlan(TIME_TRUTH, refine=(1, 2), output_divisor=1))
+    build((study,), tmp_path, workers=2, progress=False, settings="tiny", document=False)
+    tables = tmp_path / "tables"
+    errors = pd.read_csv(tables / "errors.csv")
+    total = errors[(errors.kind == "total") & (errors.against == "truth")]
+    assert set(total[total.headline].probe) == {"end_uz", "rod_vz"}
+    head = pd.read_csv(tables / "headline.csv").set_index("solver")
+    stresses = pd.read_csv(tables / "stresses.csv").set_index("solver")
+    assert (stresses.family == "stress").all() and (stresses.probes == "mid_szz contact_p").all()
+    assert {"cpu_s_to_5pct", "cpu_s_to_10pct"} <= set(stresses.columns)
+    for table, probes in ((head, ["end_uz", "rod_vz"]), (stresses, ["mid_szz", "contact_p"])):
+        worst = total[total.probe.isin(probes)].groupby(["solver", "level"]).err_max.max()
+        for solver in (SMFEM, REF2D):
+            assert table.loc[solver, "best_error_pct"] == pytest.approx(100 * worst[solver].min(), rel=1e-6)
 
 
 def test_every_case_of_the_quick_report_has_a_truth():
