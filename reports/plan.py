@@ -159,10 +159,12 @@ def quick() -> tuple[CaseStudy, ...]:
         CaseStudy("notched_cylinder", (
             _s(SMFEM, *grid("notched_cylinder", ({"harmonics": 20}, {"harmonics": 40}, {"refine": 2, "harmonics": 40},
                                                  {"refine": 2, "harmonics": 80}), (1, 2, 4))),
-            _s(REF2D, *grid("notched_cylinder", _r(1), (1, 2, 4)), {"refine": 2}, {"refine": 3}),
+            # the 2D reference stops at r2 here: r3 (100 CPU s, 4.3 -> 3.6 % total error) put the
+            # report over its 10 minutes once the stored truth had made it unnecessary as a truth level
+            _s(REF2D, *grid("notched_cylinder", _r(1), (1, 2, 4)), {"refine": 2}),
             _s(REF3D, *grid("notched_cylinder", _r(1), THREE_D)),
             _s(CALCULIX, {}),
-        ), reference=(REF2D, {"refine": 3}), truth=TruthPlan(TIME_TRUTH, refine=(1, 2, 3))),
+        ), reference=(REF2D, {"refine": 2}), truth=TruthPlan(TIME_TRUTH, refine=(1, 2, 3))),
         CaseStudy("notched_strip", (
             _s(SMFEM, *grid("notched_strip", ({"harmonics": 40}, {"harmonics": 80}, {"harmonics": 120},
                                               {"harmonics": 160}), (1, 2, 4))),
