@@ -10,6 +10,7 @@ import os
 import sys
 
 from cases import ParameterError, UnsupportedCase
+from runs import threads
 
 from . import cases_cmd, compare, export, run, study, truth
 from .usage import EXIT_USAGE, Parser, UsageError
@@ -26,6 +27,7 @@ def build_parser() -> Parser:
 
 
 def main(argv=None) -> int:
+    threads.pin()
     try:
         args = build_parser().parse_args(argv)
         return args.handler(args)

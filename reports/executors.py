@@ -10,11 +10,13 @@ import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
+from runs import threads
+
 from .jobs import Job, execute
 
-#: one BLAS/OpenMP thread per worker: two workers on two cores must not oversubscribe, and a
-#: run's CPU time then means one core's work
-THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+#: one BLAS/OpenMP thread per worker from its start (``execute`` pins it again, for dask's
+#: workers): two workers on two cores must not oversubscribe
+THREAD_VARIABLES = threads.LIBRARY_VARIABLES
 
 
 @contextlib.contextmanager

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from cases import UnsupportedCase, get_case
 from cases.params import ToolMissing
+from runs import threads
 from runs.files import write_run
 from runs.registry import family, solve
 
@@ -84,6 +85,7 @@ def execute(job: Job) -> Outcome:
     ``not available``; any other exception gives ``failed`` with the traceback's last line, so
     that one broken run does not lose a long study.
     """
+    threads.pin()  # a dask worker too: a run's CPU means one core's work wherever it runs
     case = job.build()
     wall0 = time.perf_counter()
     try:
