@@ -8,6 +8,7 @@ from pathlib import Path
 
 from cases import get_case, parse_sets
 from runs.files import write_run
+from runs.progress import Progress
 from runs.registry import CALCULIX, EXPLICIT, REFERENCE, SMFEM, solve
 
 from .usage import EXIT_NOT_CONVERGED, UsageError, add_sets, check_writable
@@ -37,13 +38,10 @@ def command(args) -> int:
     check_writable(out)
     if args.solver == CALCULIX and args.every:
         raise UsageError("--every: the time series is written by smfem and reference only")
-    from tqdm import tqdm
-
-    bar = tqdm(total=case.n_steps, desc=f"{case.name} ({args.solver})", unit="step",
-               disable=args.quiet or None, file=sys.stderr, leave=False)
+    bar = Progress(case.n_steps, f"{case.name} ({args.solver})", "step", enabled=not args.quiet, leave=False)
     wall0 = time.perf_counter()
     try:
-        result = solve(args.solver, case, progress=lambda step, n: bar.update(step - bar.n),
+        result = solve(args.solver, case, progress=lambda step, n: bar.update(step),
                        fields=not args.no_fields, every=args.every)
     finally:
         bar.close()

@@ -3,6 +3,7 @@ work-precision; the report adds index.html and report.pdf (:mod:`reports.build`)
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
@@ -36,7 +37,8 @@ def command(args) -> int:
                        document=args.command == "report")
     except SchedulerUnreachable as exc:
         raise UsageError(str(exc)) from None
-    print(report.tables["headline"].to_string(index=False))
+    for line in headline_lines(report.tables["headline"]):
+        print(line)
     made = "index.html, report.pdf, " if args.command == "report" else ""
     print(f"{args.command}: {len(report.study.executed)} runs executed, {report.study.cached} cached, "
           f"{report.wall_time_s:.1f} s -> {out}/ ({made}tables/, figures/)")
@@ -44,3 +46,24 @@ def command(args) -> int:
     for run in failed:
         print(f"smfem: {run.job.describe()}: failed: {run.message}", file=sys.stderr)
     return 1 if failed else 0
+
+
+def headline_lines(head) -> list[str]:
+    """The headline in a few short lines (the whole table is tables/headline.csv): per case and
+    target, SMFEM's cost and its speed-up over each other solver."""
+    lines = []
+    width = max((len(c) for c in head.case), default=0)
+    for case, rows in head.groupby("case", sort=False):
+        rows = rows.set_index("solver")
+        for column in (c for c in rows.columns if c.startswith("cpu_s_to_")):
+            target = column.removeprefix("cpu_s_to_").replace("pct", " %")
+            mine = re.sub(r"^([0-9.e+-]+) \(", r"\1 s CPU (", str(rows[column].get("smfem", "")))
+            others = []
+            for solver, row in rows.drop(index="smfem", errors="ignore").iterrows():
+                speedup = row.get(f"smfem_speedup_{column.removeprefix('cpu_s_to_')}")
+                if isinstance(speedup, str) and speedup:
+                    others.append(f"{solver} {speedup}")
+                elif str(row[column]).startswith("not available"):
+                    others.append(f"{solver} not available")
+            lines.append(f"{case:<{width}}  {target:>4}: smfem {mine}" + (f"; speed-up over {', '.join(others)}" if others else ""))
+    return lines

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import sys
 import time
 from dataclasses import dataclass, field
 
-from tqdm import tqdm
 
 from cases import get_case
+from runs.progress import Progress
 
 from .cache import Run, RunCache
 from .executors import run_jobs
@@ -91,11 +90,10 @@ def run_cached(jobs: list[Job], cache: RunCache, scheduler: str | None = None, w
         wanted.setdefault(cache.path(job), job)
     found = {path: run for path, job in wanted.items() if (run := cache.load(job)) is not None}
     missing = sorted((job for path, job in wanted.items() if path not in found), key=_cost_order)
-    with tqdm(total=len(missing), desc="study", unit="run", file=sys.stderr, disable=not progress or None) as bar:
-        for job, outcome in run_jobs(missing, scheduler, workers):
+    with Progress(len(missing), "study", "run", enabled=progress) as bar:
+        for done, (job, outcome) in enumerate(run_jobs(missing, scheduler, workers), start=1):
             found[cache.path(job)] = cache.store(job, outcome)
-            bar.set_postfix_str(job.describe(), refresh=False)
-            bar.update()
+            bar.update(done, job.describe())
     return {job: found[cache.path(job)] for job in jobs}, missing, len(wanted) - len(missing)
 
 

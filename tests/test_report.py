@@ -212,6 +212,9 @@ def test_study_command_writes_tables_and_figures_from_the_cache(tiny, tmp_path, 
     assert main(["study", "dome", "--out", str(out), "--cache", str(tiny.out / "runs"), "--quiet"]) == 0
     printed = capsys.readouterr().out
     assert "0 runs executed" in printed and "reference-3d" in printed
+    # the headline in short lines, one per target (the table is in tables/headline.csv)
+    assert [line.split(":")[0].split() for line in printed.splitlines()[:2]] == [["dome", "1", "%"], ["dome", "5", "%"]]
+    assert max(len(line) for line in printed.splitlines()) < 200
     assert (out / "figures" / "dome-work-precision.png").exists() and not (out / "index.html").exists()
     assert set(pd.read_csv(out / "tables" / "headline.csv").case) == {"dome"}
 
