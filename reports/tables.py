@@ -44,9 +44,9 @@ def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | No
     where the probes have none."""
     row = {}
     judged = an.truth is not None and no_truth == "no truth"
-    for target, cost in costs.items():
-        if s.status != OK:
-            text = f"not available: {s.message}"
+    for k, (target, cost) in enumerate(costs.items()):
+        if s.status != OK:  # the reason once, in the first target's cell, without the solver's name
+            text = f"not available: {s.message.removeprefix(f'{solver}: ')}" if k == 0 else "not available"
         elif not judged:
             text = no_truth
         else:

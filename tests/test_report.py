@@ -201,7 +201,8 @@ def test_a_solver_that_cannot_run_a_case_gives_not_available(monkeypatch, tmp_pa
     an = analyse(CaseRuns(study, {SMFEM: [run]}, refused, run))
     row = headline_table([an]).iloc[0]
     assert not an.available and row.truth == "none available"
-    assert row["cpu_s_to_1pct"].startswith("not available")
+    assert row["cpu_s_to_1pct"] == "not available: contact is not part of this version"
+    assert row["cpu_s_to_5pct"] == "not available"  # the reason once
 
 
 def test_study_command_writes_tables_and_figures_from_the_cache(tiny, tmp_path, monkeypatch, capsys):
