@@ -166,13 +166,31 @@ def _orders(case, solver: str, s: SolverSummary) -> list[dict]:
     for space, group in pts.groupby("space", sort=False):
         group = group[np.isfinite(group.total)]
         if group.dt.nunique() >= 2:
+            order = metrics.observed_order(group.dt, group.total)
             rows.append({"case": case.name, "solver": solver, "error": TOTAL, "h": "dt", "fixed": space,
-                         "levels": len(group), "order": metrics.observed_order(group.dt, group.total)})
+                         "levels": len(group), "order": order, "reading": _reading(order)})
     same = pts[np.isfinite(pts.spatial)]
     if len(same) >= 2:
+        order = metrics.observed_order(same.n_dof ** -0.5, same.spatial)
         rows.append({"case": case.name, "solver": solver, "error": SPATIAL, "h": "dof^(-1/2)", "fixed": "case dt",
-                     "levels": len(same), "order": metrics.observed_order(same.n_dof ** -0.5, same.spatial)})
+                     "levels": len(same), "order": order, "reading": _reading(order, "the mesh")})
     return rows
+
+
+#: below this observed order a ladder's error hardly falls: another error dominates it
+FLAT_ORDER = 0.5
+
+
+def _reading(order: float, ladder: str = "the step") -> str:
+    """What an observed order says, for a reader who meets a negative one."""
+    if not np.isfinite(order):
+        return ""
+    if order < 0:
+        return (f"the error grows slightly as {ladder} is refined: another error dominates (at a fixed mesh, "
+                "the space error) and the refined part no longer offsets it")
+    if order < FLAT_ORDER:
+        return f"flat: the error is not limited by {ladder} here, another error dominates"
+    return ""
 
 
 def _published_rows(case, cr: CaseRuns, points) -> list[dict]:

@@ -264,7 +264,8 @@ def methods(ctx: ReportContext) -> list[Section]:
         "the dt grid); its plastic strains are nodal PEEQ (accumulated), not the cases' sqrt(2/3 eps_p:eps_p). "
         "Its CPU time is ccx's own. A scene with a rigid wall is not solved (the case's section says why).",
         "Observed order: slope of log(error) against log(h), h = dt at a fixed mesh, or dof^(-1/2) at the "
-        "case's time step.",
+        "case's time step. An order near zero or negative means the refined parameter does not limit the "
+        "error there (at a fixed mesh, the space error dominates; the orders table says so per row).",
         "Runs are cached by case, resolved parameters, solver and a hash of the solver's source files: "
         "a rebuilt report reuses every finished run.",
     ])])]

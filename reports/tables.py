@@ -165,7 +165,8 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         f"{100 * FLOOR:.3g} %))\n"
         "spatial.csv: runs at the case's time step against the finest reference run at that time step\n"
         "errors.csv: per run and probe, relative max-norm and L2 errors (kind: total, spatial, published)\n"
-        "orders.csv: observed orders (log-log fit of the headline measure against dt or the mesh)\n"
+        "orders.csv: observed orders (log-log fit of the headline measure against dt or the mesh);\n"
+        "  reading: what an order below 0.5 or negative means\n"
         "published.csv: extrema found near published extrema\n"
         "runs.csv: every run (series, same-dt reference, truth levels), its status, size and cost\n")
     return tables

@@ -129,6 +129,10 @@ def test_every_case_of_the_quick_report_has_a_truth():
 def test_dome_orders_and_published_extrema_are_tabulated(tiny):
     orders = pd.read_csv(tiny.out / "tables" / "orders.csv")
     smfem = orders[(orders.case == "dome") & (orders.solver == SMFEM) & (orders.error == "total")]
+    # every order below 0.5 (negative ones included) comes with a word on what it means
+    flat = orders[orders.order < 0.5]
+    assert flat.reading.notna().all() and (orders[orders.order < 0].reading.str.startswith("the error grows")).all()
+    assert orders[orders.order >= 0.5].reading.isna().all()
     assert (smfem.h == "dt").all() and len(smfem) == 3 and (smfem.levels == 3).all()
     published = pd.read_csv(tiny.out / "tables" / "published.csv")
     assert set(published.probe) == {"apex_uz"}  # the window ends before the first extremum: NaN
