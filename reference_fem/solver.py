@@ -153,6 +153,7 @@ def output_mesh(model: Model, u_full: np.ndarray, system, v_full: np.ndarray) ->
     cell_data = {"stress": [(to_frame @ sigma @ to_frame.T).reshape(-1, 9)]}
     if case.material.plastic:
         cell_data["peps"] = [system.peps.reshape(mesh.nelements, -1).mean(axis=1)]
+    cell_data["solid"] = [np.ones(mesh.nelements, np.uint8)]  # as SMFEM's field: the cut-outs are not meshed here
     return meshio.Mesh(to_cartesian(case, rep, mesh.p).T, {cell_type: cells}, point_data=vectors, cell_data=cell_data)
 
 

@@ -12,13 +12,17 @@ WARP_FRACTION = 0.08
 
 def render_field(vtu: Path, png: Path, title: str) -> Path:
     """Deformed body (displacement magnified) coloured by the plastic strain where the run has
-    one, else by the displacement magnitude."""
+    one, else by the displacement magnitude; cells marked ``solid = 0`` (cut-outs) left out."""
     import pyvista as pv
     from vtkmodules.vtkCommonCore import vtkLogger
 
     # off-screen rendering needs no X server, but VTK warns about the missing one on every run
     vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
     mesh = pv.read(vtu)
+    if "solid" in mesh.cell_data and not np.all(mesh.cell_data["solid"] > 0):
+        # the cut-outs' fictitious material moves far more than the body: out of the picture,
+        # the warp scale and the colour range
+        mesh = mesh.threshold(0.5, scalars="solid")
     u = mesh.point_data["displacement"]
     umax = float(np.linalg.norm(u, axis=1).max())
     scale = WARP_FRACTION * mesh.length / umax if umax > 0 else 0.0

@@ -26,6 +26,7 @@ def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: 
     (default 60). Cartesian axes as in :mod:`cases.geometry`. With ``peps`` (the plastic strain
     at the sample points, (n_elements, 4, n_x3_points), at ``peps_x3`` along x3) each cell also
     carries the element's mean over its Gauss points at the x3 point nearest to the cell's middle.
+    ``solid`` (cell data, 0/1) is 0 in the cut-outs, whose fictitious material the field carries.
     """
     mesh, body = model.mesh, model.body
     ring = body == RING
@@ -52,7 +53,9 @@ def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: 
     nearest = None if peps_x3 is None else np.abs(peps_x3[None, :] - middle[:, None]).argmin(axis=1)
     if relaxed is not None:
         local = local - relaxed[:, :, nearest].transpose(2, 1, 0)
-    cell_data = {"stress": [_to_cartesian(model, local, middle).reshape(-1, 9)]}
+    cell_data = {"stress": [_to_cartesian(model, local, middle).reshape(-1, 9)],
+                 # 0 in a cut-out: fictitious material whose values a viewer masks (Threshold solid >= 1)
+                 "solid": [(inhomogeneity.element_factor(model.case, mesh, middle).T == 1.0).astype(np.uint8).ravel()]}
     if peps is not None:
         cell_data["peps"] = [peps.mean(axis=1)[:, nearest].T.ravel()]
     return meshio.Mesh(points.reshape(-1, 3), [("hexahedron", hexes.reshape(-1, 8))],
