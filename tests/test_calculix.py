@@ -54,8 +54,38 @@ def test_export_writes_the_deck_and_refuses_bad_input(tmp_path, capsys):
     assert main(["export", "notched_strip", "--format", "bdf", "--out", str(tmp_path / "y")]) == 2
     assert main(["export", "rod_impact", "--set", "wall_slope=0.01", "--out", str(tmp_path / "z")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 2 and all(line.startswith("smfem: error:") for line in err)
+    assert err[0].startswith("smfem: warning: ccx will write a .frd")  # the first, good export's
+    assert len(err) == 3 and all(line.startswith("smfem: error:") for line in err[1:])
     assert not (tmp_path / "y").exists() and not (tmp_path / "z").exists()
+
+
+def test_deck_names_each_probe_and_export_warns_of_a_large_frd(tmp_path, capsys):
+    """A node set per probe (P_<NAME>) and a comment line naming its node; the .frd estimated
+    (the notched strip's at about 115 MB: ccx 2.20 wrote 101 MB), a warning above 50 MB with the
+    way out, --frd-every N, which writes every Nth increment."""
+    deck = build_deck(get_case("thick_cylinder"))
+    for name, node in deck.probe_nodes.items():
+        assert f"** {name}: node {node}" in deck.text
+        assert f"*NSET, NSET=P_{name.upper()}\n{node}\n" in deck.text
+    assert build_deck(get_case("dome"), every=4).frd_bytes == pytest.approx(build_deck(get_case("dome")).frd_bytes / 4)
+    assert "FREQUENCY=4" in build_deck(get_case("dome"), every=4).text and "FREQUENCY" not in build_deck(get_case("dome")).text
+    assert main(["export", "notched_strip", "--out", str(tmp_path / "a")]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("smfem: warning: ccx will write a .frd of about 115 MB")
+    assert main(["export", "notched_strip", "--frd-every", "4", "--out", str(tmp_path / "b")]) == 0
+    assert main(["export", "dome", "--out", str(tmp_path / "c")]) == 0
+    assert capsys.readouterr().err == ""  # 29 MB and 13 MB: no warning
+    assert main(["export", "dome", "--frd-every", "0", "--out", str(tmp_path / "d")]) == 2
+
+
+@needs_ccx
+def test_the_frd_estimate_is_within_a_quarter_of_what_ccx_writes(tmp_path):
+    """The dome over 40 steps, every 2nd increment to the .frd (its probes name their nodes)."""
+    case = get_case("dome", {"t_end": 40 * get_case("dome").dt})
+    deck = build_deck(case, every=2)
+    (tmp_path / "job.inp").write_text(deck.text)
+    run(find_ccx(), tmp_path, case.n_steps)
+    assert (tmp_path / "job.frd").stat().st_size == pytest.approx(deck.frd_bytes, rel=0.25)
 
 
 def test_without_ccx_one_line_and_exit_2(tmp_path, capsys, monkeypatch):
