@@ -23,6 +23,7 @@ from .metrics import TARGETS, TRUTH_MARGIN
 from .plan import SMFEM
 from .study import StudyResult
 from .tables import truth_table
+from .verdict import verdict
 
 
 @dataclass
@@ -100,6 +101,17 @@ def overview(ctx: ReportContext) -> list[Section]:
     if missing:
         blocks.append(p("Not available (no solver can run them yet): " + ", ".join(missing) + "."))
     return [Section("overview", "Overview", blocks)]
+
+
+def verdict_section(ctx: ReportContext) -> list[Section]:
+    """The answer first: per scene, where SMFEM stands at equal total error (:mod:`reports.verdict`)."""
+    return [Section("verdict", "Verdict", [
+        items(verdict(ctx.tables["headline"])),
+        p(f"Total error: {HEADLINE_MEASURE}, against each scene's truth; speed-ups are CPU-time ratios at "
+          "the same error, on one thread ('more than': the other solver does not reach the target in this "
+          "study). The headline table below has every solver's cost; each case's section its "
+          "work-precision diagram and why."),
+    ])]
 
 
 def _pct(target: float) -> str:
@@ -274,7 +286,7 @@ def methods(ctx: ReportContext) -> list[Section]:
 #: sections added by later work; each is ``builder(ctx) -> list[Section]`` (the stability section)
 EXTRA_SECTIONS: list = []
 #: the document's outline
-SECTIONS = [overview, headline, cases]
+SECTIONS = [verdict_section, headline, overview, cases]
 
 
 def build_sections(ctx: ReportContext) -> list[Section]:

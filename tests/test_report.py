@@ -347,3 +347,37 @@ def test_the_calculix_row_is_there_with_ccx_and_left_out_without(tiny, tmp_path,
     cache = RunCache(tmp_path / "runs")
     cache.store(job, outcome)
     assert cache.load(job) is None  # tried again once ccx is there
+
+
+def test_the_verdict_opens_the_report_with_a_sentence_per_case(tiny):
+    from reports.verdict import verdict
+
+    import html as markup
+
+    html = markup.unescape((tiny.out / "index.html").read_text())
+    sections = [html.index(f'<section id="{name}"') for name in ("verdict", "headline", "overview")]
+    assert sections == sorted(sections) and html.index("<section") == sections[0]
+    sentences = verdict(pd.read_csv(tiny.out / "tables" / "headline.csv"))
+    assert [s.split(":")[0] for s in sentences] == ["dome", "thick_cylinder"]
+    assert all(s in html for s in sentences)
+
+
+def test_verdict_sentences_say_who_is_faster_and_why_no_claim():
+    from reports.verdict import sentence
+
+    def rows(*solvers):
+        return pd.DataFrame([dict(zip(("solver", "cpu_s_to_1pct", "cpu_s_to_5pct", "smfem_speedup_1pct",
+                                       "smfem_speedup_5pct", "best_error_pct", "truth_uncertainty_pct"), r))
+                             for r in solvers]).set_index("solver")
+
+    slower = rows((SMFEM, "not reached (best 3.5 %)", "2.84 (r4 H1 dt5e-07)", "", "", 3.5, 0.2),
+                  (REF2D, "1.05 (r1)", "1.32 (r1 dt5e-07)", "neither reaches it", "0.465x", 1.2, 0.2),
+                  (REF3D, "not reached (best 6 %)", "not reached (best 6 %)", "", "> 10.2x", 6.0, 0.2))
+    assert sentence("rod", slower) == ("rod: SMFEM reaches 5 % total error in 2.84 s CPU (r4 H1 dt5e-07), not 1 % "
+                                       "(best 3.5 %): the 2D reference 2.15 times faster, more than 10.2 times "
+                                       "faster than the 3D reference.")
+    coarse = rows((SMFEM, "truth not fine enough", "truth not fine enough", "", "", 0.4, 2.0))
+    assert "no claim" in sentence("x", coarse) and "2 %" in sentence("x", coarse)
+    missed = rows((SMFEM, "not reached (best 5.5 %)", "not reached (best 5.5 %)", "", "", 5.5, 0.24),
+                  (REF2D, "not reached (best 4.3 %)", "33.4 (r2)", "neither reaches it", "< 4.22x", 4.3, 0.24))
+    assert sentence("nc", missed) == "nc: SMFEM does not reach 5 % in this study (best 5.5 %); the 2D reference in 33.4 s (r2) reaches it."

@@ -1,0 +1,75 @@
+"""The report's verdict: one sentence per scene from the headline table, numbers included.
+
+Where SMFEM reaches the smallest target it can (1 % before 5 %), at what CPU time and
+settings, and how that compares with each other solver at the same target; where it reaches
+neither, its best error and who does better; where no claim can be made, why.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import pandas as pd
+
+from .metrics import TARGETS, TRUTH_TOO_COARSE
+from .plan import SMFEM
+
+#: how a solver is named in a sentence
+NAMES = {"reference-2d": "the 2D reference", "reference-3d": "the 3D reference", "calculix": "CalculiX"}
+_SPEEDUP = re.compile(r"^([<>]?)\s*([0-9.]+)x$")
+_COST = re.compile(r"^([0-9.e+-]+) \((.*)\)$")
+
+
+def _pct(target: float) -> str:
+    return f"{100 * target:g}pct"
+
+
+def _comparison(solver: str, speedup: str) -> str | None:
+    """``'1.05x faster than the 2D reference'`` from a speed-up cell; None where there is none."""
+    m = _SPEEDUP.match(str(speedup).strip())
+    if not m:
+        return None
+    bound, x = m.group(1), float(m.group(2))
+    name = NAMES.get(solver, solver)
+    if x >= 1:
+        more = {"<": "at most ", ">": "more than "}.get(bound, "")
+        return f"{more}{x:.3g} times faster than {name}"
+    less = {"<": "more than ", ">": "at most "}.get(bound, "")
+    return f"{name} {less}{1 / x:.3g} times faster"
+
+
+def _best(row) -> str:
+    return f"{row.best_error_pct:.2g} %" if math.isfinite(row.best_error_pct) else "no error measured"
+
+
+def sentence(case: str, rows: pd.DataFrame) -> str:
+    """The verdict on one scene from its headline rows (one per solver, indexed by solver)."""
+    if SMFEM not in rows.index:
+        return f"{case}: SMFEM has no run in this study."
+    mine = rows.loc[SMFEM]
+    first = str(mine[f"cpu_s_to_{_pct(TARGETS[0])}"])
+    if first.startswith("not available"):
+        return f"{case}: SMFEM cannot run this scene ({first})."
+    for target in TARGETS:
+        cost = _COST.match(str(mine[f"cpu_s_to_{_pct(target)}"]))
+        if cost:
+            others = [c for solver, row in rows.drop(index=SMFEM).iterrows()
+                      if (c := _comparison(solver, row[f"smfem_speedup_{_pct(target)}"]))]
+            missed = "" if target == TARGETS[0] else f", not {100 * TARGETS[0]:g} % (best {_best(mine)})"
+            there = f": {', '.join(others)}" if others else ""
+            return (f"{case}: SMFEM reaches {100 * target:g} % total error in {cost.group(1)} s CPU "
+                    f"({cost.group(2)}){missed}{there}.")
+    if all(str(mine[f"cpu_s_to_{_pct(t)}"]) == TRUTH_TOO_COARSE for t in TARGETS):
+        return (f"{case}: no claim: the truth's uncertainty ({mine.truth_uncertainty_pct:.2g} %) is too coarse "
+                f"to judge {100 * TARGETS[-1]:g} %.")
+    last = TARGETS[-1]
+    better = [f"{NAMES.get(s, s)} in {m.group(1)} s ({m.group(2)})" for s, row in rows.drop(index=SMFEM).iterrows()
+              if (m := _COST.match(str(row[f"cpu_s_to_{_pct(last)}"])))]
+    tail = f"; {' and '.join(better)} reach{'es' if len(better) == 1 else ''} it" if better else "; no other solver does"
+    return f"{case}: SMFEM does not reach {100 * last:g} % in this study (best {_best(mine)}){tail}."
+
+
+def verdict(head: pd.DataFrame) -> list[str]:
+    """One sentence per case of the headline table (``tables/headline.csv``)."""
+    return [sentence(case, rows.set_index("solver")) for case, rows in head.groupby("case", sort=False)]
