@@ -74,6 +74,19 @@ class Case:
     def harmonics(self) -> int:
         return self.params["harmonics"]
 
+    def unit_of(self, field: str) -> str:
+        """The unit of a probe's ``field`` (``'u'``, ``'v'``, ``'sigma'``, ``'peps'``) in the
+        case's units: ``'SI ...'`` gives m, m/s, Pa; otherwise the first item of ``units`` is the
+        length and the first in parentheses the stress (the dome: ``'in, lbf, s (psi, ...)'``)."""
+        if field == "peps":
+            return "-"
+        if self.units.startswith("SI"):
+            length, stress = "m", "Pa"
+        else:
+            length = self.units.split(",")[0].strip()
+            stress = self.units.split("(")[1].split(",")[0].strip() if "(" in self.units else "stress units"
+        return {"u": length, "v": f"{length}/s", "sigma": stress}.get(field, "")
+
     @property
     def probe_names(self) -> list[str]:
         return [p.name for p in self.probes]

@@ -106,12 +106,11 @@ def histories(an: CaseAnalysis, path: Path) -> Path:
     theory = theory_curves(an.case)
     window = an.case.references.get("comparison_window_s", 0.0)
     seen = lambda t, x: smoothed(np.asarray(x, float), np.asarray(t, float), window)
+    fields = {p.name: p.field for p in an.case.probes}
     for ax, probe in zip(axes[:, 0], probes):
         truth = an.truth
-        if truth is not None and probe in truth.values:
-            note = "" if truth.converged(probe) else " (no converged truth)"
-            ax.plot(1e3 * truth.t, seen(truth.t, truth.values[probe]), color="k", lw=2.2, alpha=0.35,
-                    label=f"truth{note}")
+        if truth is not None and probe in truth.values and truth.converged(probe):  # no curve for a non-truth
+            ax.plot(1e3 * truth.t, seen(truth.t, truth.values[probe]), color="k", lw=2.2, alpha=0.35, label="truth")
         if theory is not None and probe in theory.values:
             ax.plot(1e3 * theory.t, seen(theory.t, theory.values[probe]), color="0.3", ls="--", lw=1, label=theory.name)
         for solver, runs in an.runs.series.items():
@@ -123,7 +122,7 @@ def histories(an: CaseAnalysis, path: Path) -> Path:
         for pp in (p for p in published_points(an.case) if p.probe == probe):
             t, v = np.array([pt for pt in pp.points if pt[0] <= an.case.t_end]).reshape(-1, 2).T
             ax.plot(1e3 * t, v, "x", color="C3", ms=8, mew=2, label=f"published ({pp.source.split(',')[0]})")
-        ax.set_ylabel(probe)
+        ax.set_ylabel(f"{probe}, {an.case.unit_of(fields[probe])}")
         ax.grid(True, lw=0.3, alpha=0.5)
         ax.legend(fontsize=6.5, loc="best")
     axes[-1, 0].set_xlabel("t, ms")

@@ -93,3 +93,12 @@ def test_case_keys_belong_to_their_case():
         get_case("dome", {"gap": 1e-3})
     with pytest.raises(ParameterError, match="unknown case"):
         get_case("no_such_case")
+
+
+def test_every_probe_has_a_unit_for_its_axis():
+    """The history figures label each axis with its probe's unit, from the case's units."""
+    assert [get_case("rod_impact").unit_of(f) for f in ("u", "v", "sigma", "peps")] == ["m", "m/s", "Pa", "-"]
+    assert [get_case("dome").unit_of(f) for f in ("u", "v", "sigma")] == ["in", "in/s", "psi"]
+    for name in CASES:
+        case = get_case(name)
+        assert all(case.unit_of(p.field) for p in case.probes), name
