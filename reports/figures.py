@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -18,6 +19,8 @@ from .references import published_points, theory_curves  # noqa: E402
 
 STYLE = {SMFEM: dict(color="C0", marker="o"), REF2D: dict(color="C1", marker="s"), REF3D: dict(color="C2", marker="^"),
          CALCULIX: dict(color="C4", marker="D")}
+#: characters per line of a figure's title (a 6.4 in wide figure at 8 pt)
+TITLE_WIDTH = 90
 LABEL = {SMFEM: "SMFEM", REF2D: "reference FEM 2D", REF3D: "reference FEM 3D", CALCULIX: "CalculiX 2D"}
 
 
@@ -54,12 +57,14 @@ def work_precision(an: CaseAnalysis, path: Path) -> Path:
     ax.set(xscale="log", yscale="log")
     ymin = min([s.points.total[s.points.total > 0].min() for s in an.solvers.values()
                 if len(s.points) and (s.points.total > 0).any()] or [min(TARGETS)])
-    ax.set_ylim(0.5 * min(ymin, TRUTH_MARGIN * u if math.isfinite(u) and u > 0 else ymin), None)
+    bottom = 0.5 * min(ymin, TRUTH_MARGIN * u if math.isfinite(u) and u > 0 else ymin, min(TARGETS))
+    ax.set_ylim(bottom, max(ax.get_ylim()[1], 2 * max(TARGETS)))  # the targets and their labels inside
     return _save(fig, ax, path, f"{an.case.name}: total error against CPU time\ntruth: {an.truth.name}")
 
 
 def _save(fig, ax, path: Path, title: str) -> Path:
-    ax.set_title(title, fontsize=8)
+    # long truth names wrap instead of running off both sides
+    ax.set_title("\n".join(textwrap.fill(line, TITLE_WIDTH) for line in title.splitlines()), fontsize=8)
     ax.grid(True, which="both", lw=0.3, alpha=0.5)
     ax.legend(fontsize=7)
     fig.tight_layout()

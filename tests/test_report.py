@@ -381,3 +381,47 @@ def test_verdict_sentences_say_who_is_faster_and_why_no_claim():
     missed = rows((SMFEM, "not reached (best 5.5 %)", "not reached (best 5.5 %)", "", "", 5.5, 0.24),
                   (REF2D, "not reached (best 4.3 %)", "33.4 (r2)", "neither reaches it", "< 4.22x", 4.3, 0.24))
     assert sentence("nc", missed) == "nc: SMFEM does not reach 5 % in this study (best 5.5 %); the 2D reference in 33.4 s (r2) reaches it."
+
+
+def _texts_outside(fig) -> list[str]:
+    """The visible, non-empty texts of ``fig`` whose extent leaves the figure (rendered)."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    box = fig.bbox
+    out = []
+    tight = fig.get_tightbbox(renderer)  # what is drawn, tick labels included (inches)
+    if tight.x0 < -0.01 or tight.y0 < -0.01 or tight.x1 > fig.bbox_inches.x1 + 0.01 or tight.y1 > fig.bbox_inches.y1 + 0.01:
+        out.append(f"drawn extent {tight} beyond {fig.bbox_inches}")
+    ticks = {id(t) for ax in fig.axes for t in ax.get_xticklabels(which="both") + ax.get_yticklabels(which="both")}
+    for text in fig.findobj(lambda a: hasattr(a, "get_text") and hasattr(a, "get_window_extent")):
+        if id(text) in ticks or not text.get_visible() or not str(text.get_text()).strip():
+            continue  # tick labels: the tight box above covers those drawn
+        e = text.get_window_extent(renderer)
+        if e.x0 < box.x0 - 1 or e.x1 > box.x1 + 1 or e.y0 < box.y0 - 1 or e.y1 > box.y1 + 1:
+            out.append(text.get_text())
+    return out
+
+
+def test_work_precision_and_history_figures_keep_their_text_inside(tiny, tmp_path, monkeypatch):
+    """Titles (long truth names wrap), target labels and axis labels lie inside the figure, and
+    every history axis names its unit."""
+    import matplotlib.pyplot as plt
+
+    from reports import figures
+
+    kept = []
+    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig))
+    for an in tiny.analyses:
+        figures.work_precision(an, tmp_path / f"{an.case.name}-wp.png")
+        figures.histories(an, tmp_path / f"{an.case.name}-h.png")
+    fig, ax = plt.subplots(figsize=(6.4, 4.6))  # the stored truths' names are long: they wrap
+    ax.plot([1, 2], [1, 2], label="a")
+    figures._save(fig, ax, tmp_path / "long.png", "notched_strip: total error against CPU time\ntruth: "
+                  "reference-explicit: r8 (2D, bbar True), central differences at 0.5 of the critical step, "
+                  "meshes r2, r4, r8, Richardson where the r3-r6 pair confirms it")
+    assert len(kept) == 2 * len(tiny.analyses) + 1
+    for fig in kept:
+        assert _texts_outside(fig) == []
+    for fig, an in zip(kept[1:-1:2], tiny.analyses):
+        labels = [ax.get_ylabel() for ax in fig.axes]
+        assert all(", " in label and label.split(", ")[-1] for label in labels), labels
