@@ -31,7 +31,9 @@ def render_field(vtu: Path, png: Path, title: str) -> Path:
     scalars = "peps" if "peps" in mesh.cell_data else "|u|"
     plotter = pv.Plotter(off_screen=True, window_size=(900, 640))
     plotter.add_mesh(warped, scalars=scalars, cmap="viridis", show_edges=False,
-                     scalar_bar_args={"title": "equivalent plastic strain" if scalars == "peps" else "|displacement|"})
+                     # short labels on a bar kept clear of the window's edges: the last label was cut ("8.99e-")
+                     scalar_bar_args={"title": "equivalent plastic strain" if scalars == "peps" else "|displacement|",
+                                      "fmt": "%.3g", "position_x": 0.2, "width": 0.6, "n_labels": 4})
     plotter.add_mesh(mesh.extract_feature_edges(), color="gray", line_width=0.5, opacity=0.4)
     plotter.add_text(f"{title}\ndisplacement x {scale:.3g}", font_size=10)
     plotter.view_vector((0.45, -0.9, 1.0))  # from above and aside: rings here are thin in z
