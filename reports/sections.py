@@ -118,11 +118,6 @@ def _pct(target: float) -> str:
     return f"{100 * target:g}pct"
 
 
-HEADLINE_COLUMNS = {"truth_uncertainty_pct": "truth uncertainty, %", "best_error_pct": "best total error, %",
-                    **{f"cpu_s_to_{_pct(t)}": f"CPU s to {100 * t:g} % (settings)" for t in TARGETS},
-                    **{f"smfem_speedup_{_pct(t)}": f"SMFEM speed-up at {100 * t:g} %" for t in TARGETS}}
-
-
 def headline(ctx: ReportContext) -> list[Section]:
     names = " and ".join(f"{100 * t:g} %" for t in TARGETS)
     blocks = [
@@ -133,7 +128,7 @@ def headline(ctx: ReportContext) -> list[Section]:
           "reach it. SMFEM's speed-up is that solver's CPU time over SMFEM's at the same target ('>' when the "
           "solver does not reach it even at its dearest run, '<' when SMFEM does not). CPU time is the "
           "solve's process time (model building, factorization, time stepping), one thread."),
-        table(ctx.tables["headline"].drop(columns=["truth"]).rename(columns=HEADLINE_COLUMNS)),
+        table(ctx.tables["headline"].drop(columns=["truth"]).rename(columns=_cost_labels(ctx.tables["headline"]))),
         p("Truths: " + "; ".join(f"{an.case.name}: {an.truth.name} ({an.truth.source})" for an in ctx.analyses
                                  if an.truth is not None) + "."),
     ]

@@ -5,7 +5,6 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
-
 from cases import get_case
 from runs.progress import Progress
 

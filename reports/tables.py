@@ -39,16 +39,15 @@ def runs_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
 
 
 def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | None,
-                  no_truth: str = "no truth") -> dict:
-    """CPU time to each target (with its settings) and SMFEM's speed-up there; ``no_truth``
-    where the probes have none."""
+                  no_truth: str | None = None) -> dict:
+    """CPU time to each target (with its settings) and SMFEM's speed-up there; ``no_truth``:
+    why the probes have no truth although the case has one."""
     row = {}
-    judged = an.truth is not None and no_truth == "no truth"
     for k, (target, cost) in enumerate(costs.items()):
         if s.status != OK:  # the reason once, in the first target's cell, without the solver's name
             text = f"not available: {s.message.removeprefix(f'{solver}: ')}" if k == 0 else "not available"
-        elif not judged:
-            text = no_truth
+        elif an.truth is None or no_truth:
+            text = no_truth or "no truth"
         else:
             text = cost.text()
         row[f"cpu_s_to_{_pct(target)}"] = text
@@ -90,8 +89,7 @@ def families_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
             mine = an.solvers.get(SMFEM)
             mine = mine.family_costs[family] if mine is not None and mine.status == OK else None
             u = an.uncertainty_of(family)
-            no_truth = "no truth" if math.isfinite(u) or an.truth is None else \
-                "no converged truth: singular probes (truth.csv says why)"
+            no_truth = None if math.isfinite(u) else "no converged truth: singular probes (truth.csv says why)"
             for solver, s in an.solvers.items():
                 if s.status == NOT_INSTALLED:
                     continue

@@ -21,12 +21,11 @@ from threadpoolctl import threadpool_limits
 #: the environment variable that sets another count
 VARIABLE = "SMFEM_THREADS"
 
-_limits = None  # kept alive: the limits hold while this object exists
-
-
 #: read by the BLAS and OpenMP libraries when they load (scipy's own OpenBLAS loads later than
 #: numpy's, with the first scipy.linalg call)
 LIBRARY_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+_limits = None  # kept alive: the limits hold while this object exists
 
 
 def pin() -> int:
