@@ -7,10 +7,14 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from runs import zones
+from runs.figures import plane_labels, plastic_zones
+
 from . import figures, stability  # noqa: F401  (importing stability registers its section)
 from .analysis import CaseAnalysis, analyse
 from .cache import RunCache
 from .document import render_html, write_pdf
+from .plan import REF2D
 from .sections import ReportContext, build_sections
 from .study import StudyResult, run_study
 from .tables import write_tables
@@ -44,15 +48,17 @@ def case_figures(an: CaseAnalysis, out: Path) -> dict[str, str]:
     figures.histories(an, out / made["histories"])
     run = an.runs.fields
     if run is not None and run.path is not None:
-        if (run.path / "plastic_zones.png").exists():
+        rows = _zone_rows(an)
+        if rows:
             made["plastic_zones"] = f"figures/{name}-plastic-zones.png"
-            shutil.copyfile(run.path / "plastic_zones.png", out / made["plastic_zones"])
+            plastic_zones(rows, out / made["plastic_zones"], f"{name}: plastic zones at the paper's times",
+                          plane_labels(an.case), an.case.unit_of("u"))
         if (run.path / "fields.vtu").exists():
             made["vtu"] = f"fields/{name}-smfem.vtu"
             (out / "fields").mkdir(exist_ok=True)
             shutil.copyfile(run.path / "fields.vtu", out / made["vtu"])
             made["field"] = f"figures/{name}-field.png"
-            render_field(out / made["vtu"], out / made["field"], f"{name} (SMFEM)")
+            render_field(out / made["vtu"], out / made["field"], f"{name} (SMFEM)", an.case.unit_of("u"))
         if (run.path / "fields.pvd").exists():  # the time series: the collection and its frames
             series = out / "fields" / f"{name}-smfem-series"
             series.mkdir(parents=True, exist_ok=True)
@@ -60,6 +66,13 @@ def case_figures(an: CaseAnalysis, out: Path) -> dict[str, str]:
                 shutil.copyfile(frame, series / frame.name)
             made["pvd"] = f"fields/{name}-smfem-series/fields.pvd"
     return made
+
+
+def _zone_rows(an: CaseAnalysis) -> dict[str, list[dict]]:
+    """SMFEM's plastic zones (the fields run) beside the same-dt reference's, where they have them."""
+    runs = {"SMFEM": an.runs.fields, figures.LABEL[REF2D]: an.runs.reference}
+    return {label: zones.load(run.path / "plastic_zones.npz") for label, run in runs.items()
+            if run is not None and run.path is not None and (run.path / "plastic_zones.npz").exists()}
 
 
 def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = None, workers: int = 2,

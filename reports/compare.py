@@ -19,7 +19,7 @@ import pandas as pd
 
 from runs.errors import probe_error
 from runs.files import write_run
-from runs.figures import plastic_zones, plt
+from runs.figures import plane_labels, plastic_zones, plt, save
 from runs.registry import REFERENCE, SMFEM, solve
 from runs.zones import plastic_area
 
@@ -41,18 +41,18 @@ def comparison_table(smfem_result, reference_result) -> pd.DataFrame:
 
 def _histories_figure(case, s, r, path: Path) -> None:
     names = list(s.history)
+    fields = {p.name: p.field for p in case.probes}
     fig, axes = plt.subplots(len(names), 1, figsize=(7, 2.3 * len(names)), squeeze=False, sharex=True)
     for ax, name in zip(axes[:, 0], names):
         ax.plot(1e3 * r.t, r.history[name], "k-", lw=1.2, label="reference FEM")
         ax.plot(1e3 * s.t, s.history[name], "C3--", lw=1.2, label="SMFEM")
-        ax.set_ylabel(name, fontsize=8)
+        ax.set_ylabel(f"{name}, {case.unit_of(fields[name])}", fontsize=8)
         ax.tick_params(labelsize=7)
     axes[0, 0].legend(fontsize=8)
     axes[-1, 0].set_xlabel("t, ms")
     fig.suptitle(f"{case.name}: SMFEM against the reference FEM", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save(fig, path)
 
 
 def compare(smfem_case, reference_case, out: Path, progress=None) -> pd.DataFrame:
@@ -68,5 +68,6 @@ def compare(smfem_case, reference_case, out: Path, progress=None) -> pd.DataFram
     _histories_figure(smfem_case, s, r, out / "histories.png")
     if s.snapshots and r.snapshots:
         plastic_zones({"SMFEM": s.snapshots, "reference FEM": r.snapshots}, out / "plastic_zones.png",
-                      f"{smfem_case.name}: plastic zones (equivalent plastic strain >= 0.1 %)")
+                      f"{smfem_case.name}: plastic zones (equivalent plastic strain >= 0.1 %)",
+                      plane_labels(smfem_case), smfem_case.unit_of("u"))
     return table

@@ -12,6 +12,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from runs.figures import place_labels, save  # noqa: E402
+
 from .analysis import CaseAnalysis  # noqa: E402
 from .metrics import TARGETS, TRUTH_MARGIN, smoothed  # noqa: E402
 from .plan import CALCULIX, REF2D, REF3D, SMFEM  # noqa: E402
@@ -26,71 +28,88 @@ LABEL = {SMFEM: "SMFEM", REF2D: "reference FEM 2D", REF3D: "reference FEM 3D", C
 
 def work_precision(an: CaseAnalysis, path: Path) -> Path:
     """Total error against CPU time, log-log: every run as a point, each solver's front as a
-    line, the targets dashed, and the band below three times the truth's uncertainty, where no
-    error can be measured, shaded."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.6))
-    plotted = False
+    line with its points labelled, the targets dashed, and the band below three times the
+    truth's uncertainty, where no error can be measured, shaded."""
+    fig, ax = _axes(4.9)
+    labels = []
     for solver, s in an.solvers.items():
         pts = s.points[np.isfinite(s.points.total) & (s.points.total > 0)] if len(s.points) else s.points
         if not len(pts):
             ax.plot([], [], ls="none", **STYLE[solver], label=f"{LABEL[solver]}: {s.status}")
             continue
-        plotted = True
-        ax.plot(pts.cpu, pts.total, ls="none", alpha=0.35, **STYLE[solver])
+        ax.plot(pts.cpu, 100 * pts.total, ls="none", alpha=0.35, **STYLE[solver])
         front = pts.set_index("label").loc[[lab for lab in s.front if lab in set(pts.label)]]
-        ax.plot(front.cpu, front.total, **STYLE[solver], label=f"{LABEL[solver]} (front)")
-        for lab, row in front.iterrows():
-            ax.annotate(lab, (row.cpu, row.total), textcoords="offset points", xytext=(4, 3), fontsize=6,
-                        color=STYLE[solver]["color"])
+        ax.plot(front.cpu, 100 * front.total, **STYLE[solver], label=f"{LABEL[solver]} (front)")
+        labels.append((front.cpu, 100 * front.total, front.index, STYLE[solver]["color"]))
     for target in TARGETS:
-        ax.axhline(target, color="0.4", ls="--", lw=0.8)
-        ax.annotate(f"{100 * target:g} %", (1.0, target), xycoords=("axes fraction", "data"), xytext=(-24, 2),
+        ax.axhline(100 * target, color="0.4", ls="--", lw=0.8)
+        ax.annotate(f"{100 * target:g} %", (1.0, 100 * target), xycoords=("axes fraction", "data"), xytext=(-24, 2),
                     textcoords="offset points", fontsize=7, color="0.3")
     u = an.truth_uncertainty
     if math.isfinite(u) and u > 0:
-        ax.axhspan(1e-12, TRUTH_MARGIN * u, color="0.85", zorder=0,
+        ax.axhspan(1e-10, 100 * TRUTH_MARGIN * u, color="0.85", zorder=0,
                    label=f"below {TRUTH_MARGIN:g} x truth uncertainty ({100 * u:.2g} %)")
-    ax.set(xlabel="CPU time of the solve, s", ylabel="total error (relative max-norm)")
-    if not plotted:
+    ax.set(xlabel="CPU time of the solve, s", ylabel="total error (relative max-norm), %")
+    if not labels:
         ax.text(0.5, 0.5, "no run compared with a truth", ha="center", transform=ax.transAxes)
         return _save(fig, ax, path, f"{an.case.name}: no truth")
-    ax.set(xscale="log", yscale="log")
+    _log_axes(ax)
     ymin = min([s.points.total[s.points.total > 0].min() for s in an.solvers.values()
                 if len(s.points) and (s.points.total > 0).any()] or [min(TARGETS)])
     bottom = 0.5 * min(ymin, TRUTH_MARGIN * u if math.isfinite(u) and u > 0 else ymin, min(TARGETS))
-    ax.set_ylim(bottom, max(ax.get_ylim()[1], 2 * max(TARGETS)))  # the targets and their labels inside
-    return _save(fig, ax, path, f"{an.case.name}: total error against CPU time\ntruth: {an.truth.name}")
+    ax.set_ylim(100 * bottom, max(ax.get_ylim()[1], 200 * max(TARGETS)))  # the targets and their labels inside
+    return _save(fig, ax, path, f"{an.case.name}: total error against CPU time\ntruth: {an.truth.name}", labels)
 
 
-def _save(fig, ax, path: Path, title: str) -> Path:
+def _axes(height: float):
+    # the legend goes below the axes, where it cannot cover a point or its label
+    return plt.subplots(figsize=(6.4, height), layout="constrained")
+
+
+def _log_axes(ax) -> None:
+    """Log scales whose limits reach the powers of ten around the data: on a range narrower
+    than a decade matplotlib labels minor ticks, and those run into each other."""
+    ax.set(xscale="log", yscale="log")
+    for get, put in ((ax.get_xlim, ax.set_xlim), (ax.get_ylim, ax.set_ylim)):
+        lo, hi = get()
+        put(10 ** math.floor(math.log10(lo)), 10 ** math.ceil(math.log10(hi)))
+
+
+def _label_points(ax, labels) -> None:
+    """Each solver's points labelled clear of each other (those with no free spot left out, and
+    said so)."""
+    left_out = sum(place_labels(ax, x, y, names, color) for x, y, names, color in labels)
+    if left_out:
+        ax.annotate(f"{left_out} point labels left out (no free spot)", (0.01, 0.01), xycoords="axes fraction",
+                    fontsize=6, color="0.4")
+
+
+def _save(fig, ax, path: Path, title: str, labels=()) -> Path:
     # long truth names wrap instead of running off both sides
     ax.set_title("\n".join(textwrap.fill(line, TITLE_WIDTH) for line in title.splitlines()), fontsize=8)
     ax.grid(True, which="both", lw=0.3, alpha=0.5)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    if ax.get_legend_handles_labels()[0]:
+        fig.legend(loc="outside lower center", ncols=2, fontsize=7)
+    _label_points(ax, labels)  # last: the layout is final, the labels land where they are checked
+    return save(fig, path)
 
 
 def spatial_precision(an: CaseAnalysis, path: Path) -> Path:
     """The paper's comparison: error against the same-dt reference, runs at the case's dt."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    plotted = False
+    fig, ax = _axes(4.6)
+    labels = []
     for solver, s in an.solvers.items():
         pts = s.points[np.isfinite(s.points.spatial) & (s.points.spatial > 0)] if len(s.points) else s.points
         if not len(pts):
             continue
-        plotted = True
-        ax.plot(pts.cpu, pts.spatial, **STYLE[solver], label=LABEL[solver])
-        for row in pts.itertuples():
-            ax.annotate(row.label, (row.cpu, row.spatial), textcoords="offset points", xytext=(4, 3), fontsize=6,
-                        color=STYLE[solver]["color"])
-    ax.set(xlabel="CPU time of the solve, s", ylabel="relative max-norm difference")
-    if plotted:
-        ax.set(xscale="log", yscale="log")
+        ax.plot(pts.cpu, 100 * pts.spatial, **STYLE[solver], label=LABEL[solver])
+        labels.append((pts.cpu, 100 * pts.spatial, pts.label, STYLE[solver]["color"]))
+    ax.set(xlabel="CPU time of the solve, s", ylabel="relative max-norm difference, %")
+    if labels:
+        _log_axes(ax)
     return _save(fig, ax, path, f"{an.case.name}: at the case's dt, against "
-                 f"{an.reference.name if an.reference else 'none'}\n(spatial discretization only, as the paper compared)")
+                 f"{an.reference.name if an.reference else 'none'}\n(spatial discretization only, as the paper compared)",
+                 labels)
 
 
 def _most_accurate(an: CaseAnalysis, solver: str, runs):
@@ -134,7 +153,5 @@ def histories(an: CaseAnalysis, path: Path) -> Path:
     fig.suptitle(f"{an.case.name}: probe histories"
                  + (f", through a {1e6 * window:.3g} us window as compared" if window else ""), fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save(fig, path)
 

@@ -1,4 +1,6 @@
-"""A picture of the synthesized 3-D field of an SMFEM run (``fields.vtu``), rendered off-screen."""
+"""A picture of the synthesized 3-D field of an SMFEM run (``fields.vtu``): the body rendered
+off-screen by VTK, its title and colour bar drawn by matplotlib, so the picture's text goes
+through the same layout check as every other figure (:func:`runs.figures.save`)."""
 
 from __future__ import annotations
 
@@ -10,10 +12,16 @@ import numpy as np
 WARP_FRACTION = 0.08
 
 
-def render_field(vtu: Path, png: Path, title: str) -> Path:
+def render_field(vtu: Path, png: Path, title: str, length_unit: str) -> Path:
     """Deformed body (displacement magnified) coloured by the plastic strain where the run has
     one, else by the displacement magnitude; cells marked ``solid = 0`` (cut-outs) left out."""
+    import matplotlib.pyplot as plt
     import pyvista as pv
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+    from runs.figures import save
+
     from vtkmodules.vtkCommonCore import vtkLogger
 
     # off-screen rendering needs no X server, but VTK warns about the missing one on every run
@@ -29,14 +37,32 @@ def render_field(vtu: Path, png: Path, title: str) -> Path:
     mesh.point_data["|u|"] = np.linalg.norm(u, axis=1)
     warped = mesh.warp_by_vector("displacement", factor=scale)
     scalars = "peps" if "peps" in mesh.cell_data else "|u|"
+    values = np.asarray(warped.cell_data[scalars] if scalars == "peps" else warped.point_data[scalars], float)
+    clim = (float(values.min()), float(values.max()) or 1.0)
     plotter = pv.Plotter(off_screen=True, window_size=(900, 640))
-    plotter.add_mesh(warped, scalars=scalars, cmap="viridis", show_edges=False,
-                     # short labels on a bar kept clear of the window's edges: the last label was cut ("8.99e-")
-                     scalar_bar_args={"title": "equivalent plastic strain" if scalars == "peps" else "|displacement|",
-                                      "fmt": "%.3g", "position_x": 0.2, "width": 0.6, "n_labels": 4})
+    plotter.add_mesh(warped, scalars=scalars, cmap="viridis", clim=clim, show_edges=False, show_scalar_bar=False)
     plotter.add_mesh(mesh.extract_feature_edges(), color="gray", line_width=0.5, opacity=0.4)
-    plotter.add_text(f"{title}\ndisplacement x {scale:.3g}", font_size=10)
     plotter.view_vector((0.45, -0.9, 1.0))  # from above and aside: rings here are thin in z
-    plotter.screenshot(png)
+    image = _cropped(plotter.screenshot(return_img=True))
     plotter.close()
-    return png
+    # as tall as the picture needs, up to a page: a rod's picture is narrow then
+    fig, ax = plt.subplots(figsize=(7.0, min(7.0 * image.shape[0] / image.shape[1] + 1.3, 8.5)), layout="constrained")
+    ax.imshow(image)
+    ax.set_axis_off()
+    percent = 100.0 if scalars == "peps" else 1.0
+    bar = fig.colorbar(ScalarMappable(Normalize(percent * clim[0], percent * clim[1]), "viridis"), ax=ax,
+                       orientation="horizontal", shrink=0.7, pad=0.02)
+    bar.set_label("equivalent plastic strain, %" if scalars == "peps" else f"|displacement|, {length_unit}", fontsize=9)
+    bar.ax.tick_params(labelsize=8)
+    ax.set_title(f"{title}: displacement drawn x {scale:.3g}", fontsize=10)
+    return save(fig, png)
+
+
+def _cropped(image: np.ndarray, margin: int = 12) -> np.ndarray:
+    """The picture without the empty background around the body."""
+    busy = np.flatnonzero((image != image[0, 0]).any(axis=-1).any(axis=1)), \
+        np.flatnonzero((image != image[0, 0]).any(axis=-1).any(axis=0))
+    if not len(busy[0]):
+        return image
+    (r0, r1), (c0, c1) = ((max(b[0] - margin, 0), b[-1] + margin + 1) for b in busy)
+    return image[r0:r1, c0:c1]

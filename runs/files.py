@@ -75,8 +75,9 @@ def write_run(out: Path, case, solver: str, result, wall_time_s: float) -> None:
     if getattr(result, "frames", None):
         write_series(out, result.frames)
     if getattr(result, "snapshots", None):
-        from .figures import plastic_zones
+        from .figures import plane_labels, plastic_zones
         from .zones import save
 
         save(result.snapshots, out / "plastic_zones.npz")
-        plastic_zones({solver: result.snapshots}, out / "plastic_zones.png", f"{case.name}: plastic zones")
+        plastic_zones({solver: result.snapshots}, out / "plastic_zones.png", f"{case.name}: plastic zones",
+                      plane_labels(case), case.unit_of("u"))

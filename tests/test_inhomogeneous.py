@@ -229,6 +229,6 @@ def test_the_field_marks_the_cut_out_cells(tmp_path):
     assert speed.max() > 1.5 * speed[body_nodes].max()  # measured 9.9 against 5.5 m/s: the fictitious material
     vtu = tmp_path / "field.vtu"
     meshio.write(vtu, mesh)
-    assert render_field(vtu, tmp_path / "field.png", "notched").stat().st_size > 10_000
+    assert render_field(vtu, tmp_path / "field.png", "notched", "m").stat().st_size > 10_000
     whole = get_case("thick_cylinder", {"t_end": 4e-4})
     assert np.all(solve(whole).mesh.cell_data["solid"][0] == 1)

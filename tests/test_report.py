@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from browser import chromium, screenshot, verdict_on_first_screen
 from cases import UnsupportedCase, get_case
 from reports import metrics
 from reports.analysis import analyse
@@ -173,18 +174,22 @@ def test_study_on_a_dask_local_cluster_matches_the_local_processes(tiny, tmp_pat
     np.testing.assert_allclose(mine.to_numpy(), local.to_numpy(), rtol=1e-12, atol=1e-15)
 
 
-def _chromium():
-    return next((c for c in ("chromium", "chromium-browser", "google-chrome") if shutil.which(c)), None)
-
-
-@pytest.mark.skipif(_chromium() is None, reason="no Chromium on this machine (Debian package 'chromium')")
+@pytest.mark.skipif(chromium() is None, reason="no Chromium on this machine (Debian package 'chromium')")
 def test_html_renders_in_headless_chromium(tiny, tmp_path):
     shot = tmp_path / "report.png"
-    subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
-                    "--disable-background-networking", f"--user-data-dir={tmp_path / 'profile'}",
-                    f"--screenshot={shot}", "--window-size=1200,2400", (tiny.out / "index.html").as_uri()],
-                   check=True, timeout=120, capture_output=True)
+    screenshot(tiny.out / "index.html", shot, "1200,2400")
     assert shot.stat().st_size > 20_000
+
+
+@pytest.mark.skipif(chromium() is None, reason="no Chromium on this machine (Debian package 'chromium')")
+def test_the_verdict_is_on_the_first_screen(tiny, tmp_path):
+    """A reader sees the verdict without scrolling: painted magenta in a copy of the page, the
+    whole section, with text inside, is in a 1200 x 1000 px screenshot."""
+    top, bottom, dark = verdict_on_first_screen(tiny.out / "index.html", tmp_path)
+    assert 0 <= top and bottom < 995, f"the verdict is not within the first 1000 px ({top}..{bottom})"
+    assert dark > 2000, "the verdict section has no text"
+    page = (tiny.out / "index.html").read_text(encoding="utf-8")
+    assert page.index('id="verdict"') < page.index('id="headline"')
 
 
 def test_a_solver_that_cannot_run_a_case_gives_not_available(monkeypatch, tmp_path):
@@ -325,7 +330,9 @@ def test_the_3d_view_renders_without_library_noise(tmp_path):
     box = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], float)[[0, 1, 3, 2, 4, 5, 7, 6]]
     vtu = tmp_path / "box.vtu"
     meshio.write(vtu, meshio.Mesh(box, [("hexahedron", np.arange(8)[None])], point_data={"displacement": 0.1 * box}))
-    code = f"from reports.view3d import render_field; render_field({str(vtu)!r}, {str(tmp_path / 'box.png')!r}, 'box')"
+    code = ("import warnings; from runs.figures import FigureLayoutWarning; "
+            "warnings.simplefilter('error', FigureLayoutWarning); "  # the picture's text is checked too
+            f"from reports.view3d import render_field; render_field({str(vtu)!r}, {str(tmp_path / 'box.png')!r}, 'box', 'm')")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "box.png").stat().st_size > 1000
