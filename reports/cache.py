@@ -1,7 +1,7 @@
 """Finished runs on disk, keyed by case, resolved parameters, solver and code version.
 
 A run's directory holds what ``smfem run`` writes (``history.csv``, ``summary.json``, maybe
-``fields.vtu`` and ``plastic_zones.png``) and ``job.json`` (the key's ingredients and the
+``fields.vtu`` and ``plastic_zones.npz``) and ``job.json`` (the key's ingredients and the
 outcome). The code version is a hash of the sources a solver's results depend on, so editing
 the reference solver does not throw away SMFEM runs, and the other way round.
 """
@@ -27,6 +27,9 @@ from .plan import MODAL, SMFEM
 
 #: packages whose source decides a solver's results
 SOURCES = {SMFEM: ("smfem", "cases", "runs"), "reference": ("reference_fem", "cases", "runs")}
+#: modules of those packages that draw or report and decide nothing in a run's files: editing a
+#: figure must not send a report back to rerunning every solve
+PRESENTATION = {"runs/figures.py", "runs/progress.py"}
 
 
 @functools.cache
@@ -36,6 +39,8 @@ def code_version(solver: str) -> str:
     for package in SOURCES[SMFEM if solver == SMFEM else "reference"]:
         root = Path(importlib.util.find_spec(package).submodule_search_locations[0])
         for path in sorted(root.rglob("*.py")):
+            if f"{package}/{path.relative_to(root)}" in PRESENTATION:
+                continue
             h.update(str(path.relative_to(root)).encode())
             h.update(path.read_bytes())
     return h.hexdigest()[:16]

@@ -101,6 +101,7 @@ def execute(job: Job) -> Outcome:
     wall = time.perf_counter() - wall0
     with tempfile.TemporaryDirectory(prefix="smfem-job-") as tmp:
         out = Path(tmp)
-        write_run(out, case, family(job.solver), result, wall)
+        # the zones' data only: the report draws the figure it shows (SMFEM beside the reference)
+        write_run(out, case, family(job.solver), result, wall, zone_figure=False)
         files = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
     return Outcome(OK if result.converged else NOT_CONVERGED, result.message, files)

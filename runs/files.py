@@ -61,10 +61,10 @@ def write_series(out: Path, frames) -> None:
                                     "  <Collection>\n" + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
 
 
-def write_run(out: Path, case, solver: str, result, wall_time_s: float) -> None:
+def write_run(out: Path, case, solver: str, result, wall_time_s: float, zone_figure: bool = True) -> None:
     """Write history.csv (one row per time of ``result.t``, t = 0 included), summary.json, fields.vtu,
     with a time series fields.pvd and its fields_NNNNN.vtu, and for plastic runs
-    plastic_zones.png with its data plastic_zones.npz."""
+    plastic_zones.npz with (``zone_figure``) its picture plastic_zones.png."""
     out.mkdir(parents=True, exist_ok=True)
     n = len(result.t)  # a run that stopped early has its converged steps only; a modal run no steps
     table = pd.DataFrame({"t": result.t[:n], **{k: v[:n] for k, v in result.history.items()}})
@@ -79,5 +79,6 @@ def write_run(out: Path, case, solver: str, result, wall_time_s: float) -> None:
         from .zones import save
 
         save(result.snapshots, out / "plastic_zones.npz")
-        plastic_zones({solver: result.snapshots}, out / "plastic_zones.png", f"{case.name}: plastic zones",
-                      plane_labels(case), case.unit_of("u"))
+        if zone_figure:
+            plastic_zones({solver: result.snapshots}, out / "plastic_zones.png", f"{case.name}: plastic zones",
+                          plane_labels(case), case.unit_of("u"))
