@@ -120,11 +120,14 @@ def test_stresses_have_their_own_table_and_stay_out_of_the_headline(tmp_path):
 def test_every_case_of_the_quick_report_has_a_truth():
     assert all(study.truth is not None for study in quick())
     for study in quick():
-        # three time steps per solver; CalculiX is one point at the case's settings (its runs cost
-        # 100 times the reference's on the same mesh)
+        # three time steps per solver (two for the 3D reference on the notched scenes, where its
+        # mesh limits it); CalculiX is one point at the case's settings (its runs cost 100 times
+        # the reference's on the same mesh), left to the full report on the notched cylinder
         dts = {s.solver: {level.get("dt") for level in s.levels} for s in study.series if s.solver != CALCULIX}
-        assert all(len(d) >= 3 for d in dts.values()), (study.case, dts)
-        assert [s.levels for s in study.series if s.solver == CALCULIX] == [({},)]
+        notched = study.case.startswith("notched")
+        assert all(len(d) >= (2 if notched and solver == REF3D else 3) for solver, d in dts.items()), (study.case, dts)
+        calculix = [s.levels for s in study.series if s.solver == CALCULIX]
+        assert calculix == ([] if study.case == "notched_cylinder" else [({},)])
 
 
 def test_dome_orders_and_published_extrema_are_tabulated(tiny):
