@@ -71,6 +71,16 @@ class Case:
         return self.params["refine"]
 
     @property
+    def mesh_scale(self) -> float:
+        """What the paper mesh's element counts are multiplied by: ``refine / coarsen``."""
+        return self.params["refine"] / self.params.get("coarsen", 1)
+
+    @property
+    def cutout_edges(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """The cut-outs' edges along the section's s and t axes (grid nodes at every resolution)."""
+        return (tuple(e for c in self.cutouts for e in c.s_range), tuple(e for c in self.cutouts for e in c.t_range))
+
+    @property
     def harmonics(self) -> int:
         return self.params["harmonics"]
 

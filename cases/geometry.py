@@ -45,13 +45,22 @@ class Axis:
         if len(self.breaks) != len(self.counts) + 1:
             raise ValueError("Axis needs one more break than counts")
 
-    def grid(self, refine: int = 1) -> np.ndarray:
-        """Node coordinates, shape ``(n_elements + 1,)``, each segment split ``refine`` times more."""
-        refine = refine if self.refinable else 1
-        parts = [
-            np.linspace(a, b, n * refine + 1)[:-1]
-            for a, b, n in zip(self.breaks[:-1], self.breaks[1:], self.counts)
-        ]
+    def grid(self, scale: float = 1, extra=()) -> np.ndarray:
+        """Node coordinates, shape ``(n_elements + 1,)``, each segment split into ``scale`` times
+        its count (rounded, at least one element: ``scale`` < 1 coarsens). ``extra`` points (a
+        cut-out's edges) inside a segment split it, each part keeping the segment's element
+        size (rounded, at least one): where they fall on the grid already, nothing changes;
+        a coarsened grid keeps them as nodes."""
+        scale = scale if self.refinable else 1
+        parts = []
+        for a, b, n in zip(self.breaks[:-1], self.breaks[1:], self.counts):
+            tol = 1e-9 * (b - a)
+            cuts = sorted({a, b} | {float(e) for e in extra if a + tol < e < b - tol})
+            if len(cuts) == 2:
+                parts.append(np.linspace(a, b, max(1, int(round(n * scale))) + 1)[:-1])
+                continue
+            h = (b - a) / max(1.0, n * scale)
+            parts += [np.linspace(c0, c1, max(1, int(round((c1 - c0) / h))) + 1)[:-1] for c0, c1 in zip(cuts[:-1], cuts[1:])]
         return np.concatenate(parts + [np.array([self.breaks[-1]])])
 
     @property

@@ -7,9 +7,12 @@ import time
 from pathlib import Path
 
 from cases import get_case, parse_sets
+from runs import validity
+from runs.estimate import ESTIMATED, estimate, summary_line
 from runs.files import write_run
 from runs.progress import Progress
 from runs.registry import CALCULIX, EXPLICIT, REFERENCE, SMFEM, solve
+from runs.tolerance import search
 
 from .usage import EXIT_NOT_CONVERGED, UsageError, add_sets, check_writable
 
@@ -27,6 +30,14 @@ def add(sub) -> None:
     run.add_argument("--every", type=int, default=0, metavar="N",
                      help="also write fields.pvd, a ParaView time series with the field every N steps")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--estimate", choices=("on", "off"), default="on",
+                     help="the run's error estimate from cheap companion runs (coarser mesh, twice the step, "
+                          "half the harmonics), in summary.json and one line; off: the run alone")
+    run.add_argument("--tol", default=None, metavar="TARGET",
+                     help="an accuracy to reach (1%% or 0.01): runs from the case's settings up, refining what the "
+                          "estimate says holds the error up, until the estimate meets it (exit 3 if not within --max-cpu)")
+    run.add_argument("--max-cpu", type=float, default=600.0, metavar="S",
+                     help="CPU seconds --tol may spend, runs and companions together (default 600)")
     run.set_defaults(handler=command)
 
 
@@ -38,6 +49,8 @@ def command(args) -> int:
     check_writable(out)
     if args.solver == CALCULIX and args.every:
         raise UsageError("--every: the time series is written by smfem and reference only")
+    if args.tol is not None:
+        return _to_tolerance(case, args, out)
     bar = Progress(case.n_steps, f"{case.name} ({args.solver})", "step", enabled=not args.quiet, leave=False)
     wall0 = time.perf_counter()
     try:
@@ -45,10 +58,109 @@ def command(args) -> int:
                        fields=not args.no_fields, every=args.every)
     finally:
         bar.close()
-    write_run(out, case, args.solver, result, time.perf_counter() - wall0)
+    wall = time.perf_counter() - wall0
+    check = validity.check(case, result)
+    est = None
+    if args.estimate == "on" and result.converged and args.solver in ESTIMATED:
+        est = estimate(case, args.solver, result, run=_companion_runner(args.quiet))
+        if not check["valid"]:  # the companions measure the discretization of a model that does not hold
+            est = {**est, "claim": "none: the run is outside the small-strain model (validity)"}
+    written = write_run(out, case, args.solver, result, wall,
+                        extra={"validity": check, **({"error_estimate": est} if est else {})})
+    warning = validity.warning_line(case, written["validity"])
+    if warning:
+        print(warning, file=sys.stderr)
     if not result.converged:
         print(f"smfem: {case.name}: {result.message}", file=sys.stderr)
         return EXIT_NOT_CONVERGED
     print(f"{case.name} ({args.solver}): {len(result.iterations)} steps, {result.n_dof} dof, "
           f"cpu {result.cpu_time_s:.3g} s -> {out}")
+    if est is not None:
+        print(summary_line(case, args.solver, est))
+    return 0
+
+
+def _companion_runner(quiet: bool):
+    """The estimate's companion runs, with a line (or bar) per companion."""
+    def run(solver, case):
+        bar = Progress(case.n_steps, f"{case.name} ({solver}, error-estimate companion)", "step",
+                       enabled=not quiet, leave=False)
+        try:
+            return solve(solver, case, progress=lambda step, n: bar.update(step))
+        finally:
+            bar.close()
+    return run
+
+
+#: parameters that choose the discretization, not the problem
+DISCRETIZATION = ("refine", "coarsen", "harmonics", "dt", "tol", "dim")
+
+
+def parse_target(text: str) -> float:
+    """``1%`` or ``0.01`` as a fraction; a clear error otherwise."""
+    t = text.strip()
+    try:
+        value = float(t[:-1]) / 100 if t.endswith("%") else float(t)
+    except ValueError:
+        raise UsageError(f"--tol {text!r}: give a relative accuracy, 1% or 0.01") from None
+    if not 0 < value < 1:
+        raise UsageError(f"--tol {text!r}: between 0 and 100 %")
+    return value
+
+
+def _truth_floor(case) -> float | None:
+    """Three times the stored truth's uncertainty over a built-in scene's displacement and
+    velocity probes (what no run can be shown to beat); None for a scene from a file, or with
+    physics (load, material, window) other than the stored truth's."""
+    from reports.metrics import TRUTH_MARGIN
+    from reports.stored import directory, read
+
+    path = directory(case.name)
+    if case.source is not None or not (path / "summary.json").exists():
+        return None
+    truth = read(path)
+    physics = lambda params: {k: v for k, v in params.items() if k not in DISCRETIZATION}
+    if truth.params and physics(truth.params) != physics(case.params):
+        return None
+    probes = [p.name for p in case.probes if p.field in ("u", "v")]
+    u = truth.uncertainty_of(probes)
+    return TRUTH_MARGIN * u if u == u else None
+
+
+def _settings(case) -> str:
+    return f"refine {case.refine}, harmonics {case.harmonics}, dt {case.dt:.3g}"
+
+
+def _to_tolerance(case, args, out: Path) -> int:
+    """``--tol``: the search of :mod:`runs.tolerance`, one line per run, the best run written."""
+    target = parse_target(args.tol)
+    if args.estimate == "off" or args.solver not in ESTIMATED:
+        raise UsageError(f"--tol needs the error estimate (smfem or reference, --estimate on), not {args.solver}")
+    floor = _truth_floor(case)
+    if floor is not None and target < floor:
+        raise UsageError(f"--tol {args.tol}: below three times {case.name}'s stored truth uncertainty "
+                         f"({100 * floor:.2g} %): no run can be shown to reach it")
+    found = search(case, args.solver, target, args.max_cpu, fields=not args.no_fields)
+    for k, a in enumerate(found.attempts, start=1):
+        print(f"--tol {100 * target:g} %: run {k} ({_settings(a.case)}): estimated {100 * a.error:.3g} %, "
+              f"{a.cpu_s:.3g} s CPU with its companions")
+    if not found.attempts:
+        print(f"smfem: {case.name}: --tol: the first run did not finish", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
+    best = found.best
+    check = validity.check(best.case, best.result)
+    tolerance = {"target": target, "met": found.met, "runs": [
+        {"settings": {"refine": a.case.refine, "harmonics": a.case.harmonics, "dt": a.case.dt},
+         "estimate": a.error, "cpu_s": a.cpu_s} for a in found.attempts], "cpu_s": found.cpu_s}
+    written = write_run(out, best.case, args.solver, best.result, best.wall_s,
+                        extra={"validity": check, "error_estimate": best.estimate, "tolerance": tolerance})
+    warning = validity.warning_line(best.case, written["validity"])
+    if warning:
+        print(warning, file=sys.stderr)
+    if not found.met:
+        print(f"smfem: {case.name}: --tol {100 * target:g} % not met within --max-cpu {args.max_cpu:g} s: best "
+              f"estimate {100 * best.error:.3g} % ({_settings(best.case)}), kept in {out}", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
+    print(f"{case.name} ({args.solver}): --tol {100 * target:g} % met: estimated {100 * best.error:.3g} % at "
+          f"{_settings(best.case)}, {found.cpu_s:.3g} s CPU in {len(found.attempts)} runs -> {out}")
     return 0

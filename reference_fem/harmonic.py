@@ -108,7 +108,7 @@ class HarmonicModel:
         self.probes = case.probe_names
         self.fields = [p.field for p in case.probes]
         sec = case.section
-        self.mesh = assemble_blocks([Block((axis_nodes(sec.s, case.refine), axis_nodes(sec.t, case.refine)),
+        self.mesh = assemble_blocks([Block((axis_nodes(sec.s, case.mesh_scale), axis_nodes(sec.t, case.mesh_scale)),
                                            lambda p: np.array(sec.to_x(p[0], p[1])))], lambda x: np.ones(x.shape[1], bool))
         self.basis = CellBasis(self.mesh, ElementQuad2(), intorder=INTORDER)
         self.tie = self._tie()

@@ -145,7 +145,7 @@ def build_mesh(case, grading: float = 1.0) -> RefMesh:
         raise ValueError(f"grading must be at least 1, not {grading!r}")
     rep = representation(case)
     dim = 3 if rep == SOLID else 2
-    scale = SECTION_SCALE[dim] * case.refine
+    scale = SECTION_SCALE[dim] * case.mesh_scale
     sec = case.section
     s_extra, t_extra, x3_extra = _breaks(case, rep)
     s_sing, t_sing, x3_sing = corner_lines(case) if grading > 1.0 else ((), (), ())
@@ -153,7 +153,7 @@ def build_mesh(case, grading: float = 1.0) -> RefMesh:
     t_nodes = axis_nodes(sec.t, scale, t_extra, Grading(t_sing, grading))
     x3_grading = Grading(x3_sing, grading)
     if case.body == RING and rep != AXISYMMETRIC:
-        x3_nodes = _span_nodes(0.0, 2 * np.pi, x3_extra, 2 * np.pi / (N_THETA * case.refine), x3_grading)
+        x3_nodes = _span_nodes(0.0, 2 * np.pi, x3_extra, 2 * np.pi / (N_THETA * case.mesh_scale), x3_grading)
     elif case.body != RING:
         # the section grid's own finest element, not one a break point cut short: a 0.1 mm
         # notch would otherwise make 3000 elements along a 0.3 m span

@@ -12,9 +12,11 @@ import pandas as pd
 
 from smfem import __version__
 
+from . import validity
 
-def summary(case, solver: str, result, wall_time_s: float) -> dict:
-    """The summary.json content of a run."""
+
+def summary(case, solver: str, result, wall_time_s: float, checked: dict | None = None) -> dict:
+    """The summary.json content of a run (``checked``: its validity, when already made)."""
     its = np.asarray(result.iterations, float)
     return {
         "case": case.name,
@@ -28,6 +30,7 @@ def summary(case, solver: str, result, wall_time_s: float) -> dict:
         "converged": bool(result.converged),
         "message": result.message,
         "harmonics_used": result.info.get("harmonics_used"),
+        "validity": checked if checked is not None else validity.check(case, result),
         "info": {k: v for k, v in result.info.items() if k != "harmonics_used"},
         "version": __version__,
     }
@@ -61,15 +64,19 @@ def write_series(out: Path, frames) -> None:
                                     "  <Collection>\n" + "\n".join(entries) + "\n  </Collection>\n</VTKFile>\n")
 
 
-def write_run(out: Path, case, solver: str, result, wall_time_s: float, zone_figure: bool = True) -> None:
+def write_run(out: Path, case, solver: str, result, wall_time_s: float, zone_figure: bool = True,
+              extra: dict | None = None) -> dict:
     """Write history.csv (one row per time of ``result.t``, t = 0 included), summary.json, fields.vtu,
     with a time series fields.pvd and its fields_NNNNN.vtu, and for plastic runs
-    plastic_zones.npz with (``zone_figure``) its picture plastic_zones.png."""
+    plastic_zones.npz with (``zone_figure``) its picture plastic_zones.png; ``extra``: more
+    summary entries (``error_estimate``; ``validity`` when already checked). Returns the summary."""
     out.mkdir(parents=True, exist_ok=True)
     n = len(result.t)  # a run that stopped early has its converged steps only; a modal run no steps
     table = pd.DataFrame({"t": result.t[:n], **{k: v[:n] for k, v in result.history.items()}})
     table.to_csv(out / "history.csv", index=False, float_format="%.10g")
-    (out / "summary.json").write_text(json.dumps(jsonable(summary(case, solver, result, wall_time_s)), indent=2))
+    extra = dict(extra or {})
+    written = {**summary(case, solver, result, wall_time_s, extra.pop("validity", None)), **extra}
+    (out / "summary.json").write_text(json.dumps(jsonable(written), indent=2))
     if result.mesh is not None:
         result.mesh.write(out / "fields.vtu")
     if getattr(result, "frames", None):
@@ -82,3 +89,4 @@ def write_run(out: Path, case, solver: str, result, wall_time_s: float, zone_fig
         if zone_figure:
             plastic_zones({solver: result.snapshots}, out / "plastic_zones.png", f"{case.name}: plastic zones",
                           plane_labels(case), case.unit_of("u"))
+    return written

@@ -67,9 +67,10 @@ class SectionMesh:
         return np.flatnonzero(np.abs(self.x[:, 0]) <= tol * scale)
 
 
-def section_mesh(section: Section, refine: int = 1) -> SectionMesh:
-    """Tensor-product mesh of the block, each graded segment split ``refine`` times more."""
-    s, t = section.s.grid(refine), section.t.grid(refine)
+def section_mesh(section: Section, scale: float = 1, extra=((), ())) -> SectionMesh:
+    """Tensor-product mesh of the block, each graded segment split ``scale`` times more, with
+    the ``extra`` (s, t) points (the cut-outs' edges) as nodes (:meth:`cases.geometry.Axis.grid`)."""
+    s, t = section.s.grid(scale, extra[0]), section.t.grid(scale, extra[1])
     S, T = np.meshgrid(s, t)  # [t index, s index]
     x1, x2 = section.to_x(S.ravel(), T.ravel())
     ns, nt = len(s) - 1, len(t) - 1

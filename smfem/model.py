@@ -62,7 +62,7 @@ class Model:
         self.case = case
         self.body = case.body
         self.length = case.length
-        self.mesh: SectionMesh = section_mesh(case.section, case.refine)
+        self.mesh: SectionMesh = section_mesh(case.section, case.mesh_scale, case.cutout_edges)
         self.ops = element.operators(self.mesh.element_x(), case.body, case.material.nu)
         mat = case.material
         self.D = isotropic_D(mat.E, mat.nu)

@@ -1,0 +1,193 @@
+"""An error estimate for one run, split into space, harmonics and time, from cheap companions.
+
+Each part compares two runs that differ in one parameter and turns their difference into the
+finer one's error (Richardson): ``e = d / (ratio ** p - 1)``, where ``d`` is the difference
+measured as every comparison of the project measures it (:func:`runs.errors.probe_error`: the
+relative max-norm over the window, through the case's comparison window; the relative peak
+difference for plastic strains), ``ratio`` how much finer the finer run is, and ``p`` the order.
+
+The companions are cheap next to the run:
+- space: the same run on a mesh half as fine (``refine / 2``, or ``coarsen = 2`` at an odd
+  refine): a quarter of a 2D section's unknowns. Its order is the one the elements have
+  (:data:`ORDERS`), first order where a cut-out's re-entrant corners or plasticity are in the
+  body (:data:`SINGULAR_SPACE_ORDER`);
+- time: that coarse mesh at twice and four times the step, and
+- harmonics (SMFEM, unless the scene is axisymmetric): that coarse mesh at half and a quarter
+  of the harmonics. With three levels the order is observed, per probe, and kept within
+  :data:`OBSERVED_RANGE`.
+Time and harmonics are measured on the coarse mesh: their errors come from the load's and the
+response's low modes, which the coarse mesh carries as the fine one does, and those companions
+cost an eighth to a sixteenth of the run each. A halved mesh keeps the cut-outs' edges as
+nodes (the notched strip's notch, 2.5 elements deep at half its paper mesh, would otherwise
+become another body). The total is the sum of the parts: they may cancel in the run; the
+estimate does not count on it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cases import rebuild
+
+from .errors import history_errors, probe_error
+from .registry import REF2D, REF3D, REFERENCE, SMFEM, solve
+
+#: the solvers an estimate is made for: time-stepping on a mesh (the modal truth is exact in
+#: time, the explicit engine sets its own step, CalculiX meshes on its own)
+ESTIMATED = (SMFEM, REFERENCE, REF2D, REF3D)
+#: the order of each part's error in its parameter (h, 1/harmonics, dt) where no third level
+#: observes it: Newmark's average acceleration is second order in dt, both elements second order
+#: in h in the displacements, a patch load's Fourier series second order in the response
+ORDERS = {"space": 2.0, "harmonics": 2.0, "time": 2.0}
+#: space with a re-entrant corner (a cut-out) or a plastic hinge: first order (the explicit
+#: truth ladders observe 0.7 ... 1.1 on the notched scenes)
+SINGULAR_SPACE_ORDER = 1.0
+#: observed orders are kept within these: below 1 a difference is not yet a convergence, above
+#: 2 neither scheme converges so fast, and the estimate must not shrink on a lucky cancellation
+OBSERVED_RANGE = (1.0, 2.0)
+#: the parts a run's error is split into
+PARTS = ("space", "harmonics", "time")
+
+
+@dataclass(frozen=True)
+class Companion:
+    """One companion run: its parameter overrides, and which run it is compared with."""
+
+    name: str  # a part, or the part's third level ("time2", "harmonics2")
+    overrides: dict
+    against: str  # "run" or another companion's name
+
+
+def companions(case, solver: str) -> list[Companion]:
+    """The companion runs of ``case`` for ``solver`` (:data:`ESTIMATED` only): the coarse
+    mesh, and on it twice and four times the step and (SMFEM) half and a quarter of the
+    harmonics, the third levels observing the orders. Both solvers keep the cut-outs' edges as
+    grid nodes at any mesh, so the coarse mesh is the same body."""
+    if solver not in ESTIMATED:
+        return []
+    refine, coarsen = case.refine, case.params.get("coarsen", 1)
+    coarse = {"refine": refine // 2} if refine % 2 == 0 else {"coarsen": 2 * coarsen}
+    out = [Companion("space", coarse, "run")]
+    if case.n_steps >= 2:  # twice the step fits the window
+        out.append(Companion("time", {**coarse, "dt": 2 * case.dt}, "space"))
+    if case.n_steps >= 4:
+        out.append(Companion("time2", {**coarse, "dt": 4 * case.dt}, "time"))
+    if solver == SMFEM and not case.axisymmetric and case.harmonics > 1:
+        out.append(Companion("harmonics", {**coarse, "harmonics": max(1, case.harmonics // 2)}, "space"))
+        if case.harmonics >= 4:
+            out.append(Companion("harmonics2", {**coarse, "harmonics": case.harmonics // 4}, "harmonics"))
+    return out
+
+
+def space_order(case) -> float:
+    """The space order assumed: :data:`ORDERS`, first order with cut-outs or plasticity."""
+    return SINGULAR_SPACE_ORDER if case.cutouts or case.material.plastic else ORDERS["space"]
+
+
+def space_ratio(fine, coarse) -> float:
+    """How much finer the mesh of ``fine`` is than that of ``coarse``: the geometric mean over
+    the section's refinable axes of the element-count ratios."""
+    (fs, ft), (cs, ct) = fine.cutout_edges, coarse.cutout_edges
+    ratios = [(len(fa.grid(fine.mesh_scale, fe)) - 1) / (len(ca.grid(coarse.mesh_scale, ce)) - 1)
+              for fa, ca, fe, ce in ((fine.section.s, coarse.section.s, fs, cs), (fine.section.t, coarse.section.t, ft, ct))
+              if fa.refinable]
+    return float(np.exp(np.mean(np.log(ratios)))) if ratios else 1.0
+
+
+def _ratio(part: str, a, b) -> float:
+    """How much finer run ``a`` is than run ``b`` in ``part``'s parameter."""
+    if part.startswith("time"):
+        return b.dt / a.dt
+    if part.startswith("harmonics"):
+        return a.harmonics / b.harmonics
+    return space_ratio(a, b)
+
+
+def _differences(case, a, b) -> dict[str, float]:
+    """|difference| per probe of two results, as every comparison measures it (relative to ``a``)."""
+    window = case.references.get("comparison_window_s", 0.0)
+    out = {}
+    for name, values in a.history.items():
+        if name not in b.history:
+            continue
+        if name.startswith("peps"):
+            out[name] = abs(probe_error(name, b.t, b.history[name], a.t, values)[1])
+        else:
+            out[name] = history_errors(b.t, b.history[name], a.t, values, window)[0]
+    return out
+
+
+def observed_order(d_fine: float, d_coarse: float, ratio: float) -> float:
+    """The order two successive differences show, within :data:`OBSERVED_RANGE` (the range's
+    low end when they do not fall)."""
+    if not (d_fine > 0 and d_coarse > d_fine and ratio > 1):
+        return OBSERVED_RANGE[0]
+    return float(np.clip(math.log(d_coarse / d_fine) / math.log(ratio), *OBSERVED_RANGE))
+
+
+def estimate(case, solver: str, result, run=solve) -> dict:
+    """``error_estimate`` of a run (``result`` of ``solver`` on ``case``): per probe the total and
+    its parts (and each part's order), the companions' settings and CPU. ``run(solver, case)``
+    makes a companion's result (the registry's ``solve`` by default)."""
+    comps = companions(case, solver)
+    if not comps:
+        return {"method": f"none: no estimate for {solver} (it is made for {', '.join(ESTIMATED)})"}
+    results, cases, cpu = {"run": result}, {"run": case}, {}
+    for c in comps:
+        cases[c.name] = rebuild(case, c.overrides)
+        results[c.name] = run(solver, cases[c.name])
+        cpu[c.name] = float(results[c.name].cpu_time_s)
+        if not results[c.name].converged:
+            return {"method": "companions", "failed": f"the {c.name} companion did not finish: {results[c.name].message}",
+                    "companions_cpu_s": cpu}
+    by_name = {c.name: c for c in comps}
+    diffs = {c.name: _differences(case, results[c.against], results[c.name]) for c in comps}
+    probes = {}
+    for name in result.history:
+        row, orders = {}, {}
+        for part in (p for p in PARTS if p in by_name and name in diffs[p]):
+            c = by_name[part]
+            fine, coarse = cases[c.against], cases[part]
+            ratio = _ratio(part, fine, coarse)
+            finer = c.against == "run" and ratio < 1  # the companion is the finer mesh
+            if part == "space":
+                p = space_order(case)
+            elif f"{part}2" in by_name:
+                p = observed_order(diffs[part][name], diffs[f"{part}2"].get(name, math.nan),
+                                   _ratio(part, coarse, cases[f"{part}2"]))
+            else:
+                p = ORDERS[part]
+            d = diffs[part][name]
+            # the run against a coarser companion: d / (r^p - 1); against a finer one: d / (1 - r^p)
+            row[part] = d / (1.0 - ratio ** p) if finer else d / (ratio ** p - 1.0)
+            orders[part] = p
+        probes[name] = {"total": float(sum(row.values())), **{k: float(v) for k, v in row.items()},
+                        "orders": orders}
+    return {"method": "companions", "probes": probes, "companions": {c.name: c.overrides for c in comps},
+            "companions_cpu_s": cpu, "companions_cpu_total_s": float(sum(cpu.values())),
+            "run_cpu_s": float(result.cpu_time_s)}
+
+
+def headline(case, est: dict) -> tuple[str, float] | None:
+    """The probe with the largest estimated total error over the displacement and velocity
+    probes (the headline family), and that error; None without an estimate."""
+    fields = {p.name: p.field for p in case.probes}
+    rows = [(name, v["total"]) for name, v in est.get("probes", {}).items() if fields.get(name) in ("u", "v")]
+    return max(rows, key=lambda r: r[1]) if rows else None
+
+
+def summary_line(case, solver: str, est: dict) -> str:
+    """One line for the end of ``smfem run``."""
+    if "probes" not in est:
+        return f"{case.name} ({solver}): error estimate {est.get('failed') or est['method']}"
+    top = headline(case, est)
+    if not top:
+        return f"{case.name} ({solver}): no displacement or velocity probe to estimate"
+    parts = est["probes"][top[0]]
+    split = ", ".join(f"{k} {100 * parts[k]:.2g} %" for k in PARTS if k in parts)
+    claim = f"; no accuracy claimed: {est['claim'].removeprefix('none: ')}" if "claim" in est else ""
+    return (f"{case.name} ({solver}): estimated error {100 * top[1]:.2g} % ({top[0]}: {split}); "
+            f"companions {est['companions_cpu_total_s']:.3g} s CPU{claim}")

@@ -1,0 +1,105 @@
+"""``smfem run CASE --tol 1%``: the cheapest settings expected to reach an accuracy.
+
+Start at the case's settings, estimate the run's error (:mod:`runs.estimate`), and while the
+estimate is above the target refine the parts that hold it up: each part above its share of
+the target (the target over the number of parts) is refined by the power of two its order
+says brings it within the share (refine x 2^k, harmonics x 2^k, dt / 2^k; at most x 4 at a
+time, so a pre-asymptotic estimate cannot send the next run far off). Every run and its
+estimate are kept; the search stops at the first run whose estimate meets the target, or when
+the CPU spent would pass ``max_cpu`` (the best run is then the answer, and the caller says
+the target was not met).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+from cases import rebuild
+
+from .estimate import PARTS, estimate, headline
+from .registry import solve
+
+#: how much one step of the search may refine a part
+MAX_FACTOR = 4
+
+
+@dataclass
+class Attempt:
+    case: object
+    result: object
+    estimate: dict
+    error: float  # the largest estimated total over the displacement and velocity probes
+    cpu_s: float  # the run's and its companions'
+    wall_s: float
+
+
+@dataclass
+class Search:
+    target: float
+    attempts: list[Attempt] = field(default_factory=list)
+
+    @property
+    def best(self) -> Attempt:
+        return min(self.attempts, key=lambda a: a.error)
+
+    @property
+    def met(self) -> bool:
+        return bool(self.attempts) and self.best.error <= self.target
+
+    @property
+    def cpu_s(self) -> float:
+        return sum(a.cpu_s for a in self.attempts)
+
+
+def next_settings(case, est: dict, target: float) -> dict:
+    """Overrides for the next run: each part of the headline probe above its share refined by
+    the power of two its order asks for (at most :data:`MAX_FACTOR`)."""
+    top = headline(case, est)
+    row = est["probes"][top[0]]
+    parts = {k: row[k] for k in PARTS if k in row}
+    share = target / max(len(parts), 1)
+    over = {}
+    for part, value in parts.items():
+        if not value > share:
+            continue
+        factor = min(MAX_FACTOR, 2 ** math.ceil(math.log2((value / share) ** (1 / row["orders"][part]))))
+        factor = max(factor, 2)
+        if part == "space":
+            over["refine"] = case.refine * factor
+        elif part == "harmonics":
+            over["harmonics"] = case.harmonics * factor
+        else:
+            over["dt"] = case.dt / factor
+    return over
+
+
+def search(case, solver: str, target: float, max_cpu: float, progress=None, max_runs: int = 8,
+           fields: bool = False) -> Search:
+    """Runs from ``case``'s settings up, until one's estimate meets ``target`` (a fraction) or
+    the CPU (runs and companions) would pass ``max_cpu`` s."""
+    found = Search(target)
+    current = case
+    while len(found.attempts) < max_runs:
+        wall0 = time.perf_counter()
+        result = solve(solver, current, progress=progress, fields=fields)
+        if not result.converged:
+            break
+        est = estimate(current, solver, result)
+        top = headline(current, est) if "probes" in est else None
+        error = top[1] if top else math.inf
+        found.attempts.append(Attempt(current, result, est, error, float(result.cpu_time_s) +
+                                      float(est.get("companions_cpu_total_s", 0.0)), time.perf_counter() - wall0))
+        if error <= target or top is None:
+            break
+        over = next_settings(current, est, target)
+        if not over:
+            break
+        # the next run costs at least the last one times its refinement: stop before passing the budget
+        growth = (over.get("refine", current.refine) / current.refine) ** 2 \
+            * over.get("harmonics", current.harmonics) / current.harmonics * current.dt / over.get("dt", current.dt)
+        if found.cpu_s + found.attempts[-1].cpu_s * growth > max_cpu:
+            break
+        current = rebuild(current, over)
+    return found

@@ -1,0 +1,133 @@
+"""Every run's error estimate from cheap companions (runs.estimate)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from cases import get_case
+from cli import main
+from runs import estimate as E
+from runs.registry import CALCULIX, MODAL, REF2D, SMFEM
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def test_the_companions_of_each_kind_of_run():
+    parts = lambda case, solver: {c.name: c.overrides for c in E.companions(case, solver)}
+    tc = get_case("thick_cylinder")
+    assert parts(tc, SMFEM) == {"space": {"coarsen": 2}, "time": {"coarsen": 2, "dt": 2 * tc.dt},
+                                "time2": {"coarsen": 2, "dt": 4 * tc.dt},
+                                "harmonics": {"coarsen": 2, "harmonics": tc.harmonics // 2},
+                                "harmonics2": {"coarsen": 2, "harmonics": tc.harmonics // 4}}
+    assert parts(get_case("thick_cylinder", {"refine": 4}), SMFEM)["space"] == {"refine": 2}
+    assert "harmonics" not in parts(get_case("dome"), SMFEM)  # axisymmetric: one harmonic, exact
+    assert set(parts(tc, REF2D)) == {"space", "time", "time2"}  # no harmonics in a full 2D model
+    # half the strip's mesh keeps its notch: the notch edge stays a node (2 + 8 elements, not 10)
+    strip, coarse = get_case("notched_strip"), get_case("notched_strip", {"coarsen": 2})
+    grid = coarse.section.t.grid(coarse.mesh_scale, coarse.cutout_edges[1])
+    assert len(grid) == 11 and np.isclose(grid, strip.params["notch_depth"]).any()
+    assert np.allclose(strip.section.t.grid(2, strip.cutout_edges[1]), strip.section.t.grid(2))  # same mesh where on the grid
+    assert parts(tc, CALCULIX) == {} and parts(tc, MODAL) == {}
+
+
+def test_coarsen_halves_the_paper_mesh():
+    tc, coarse = get_case("thick_cylinder"), get_case("thick_cylinder", {"coarsen": 2})
+    n = lambda c: len(c.section.s.grid(c.mesh_scale)) - 1
+    assert n(tc) == 2 * n(coarse) or n(tc) == 2 * n(coarse) - 1
+    assert E.space_ratio(tc, coarse) == pytest.approx(n(tc) / n(coarse))
+    with pytest.raises(Exception, match="coarsen"):
+        get_case("thick_cylinder", {"coarsen": 0})
+
+
+def _fake_solver(a=0.3, b=2e5, c=4.0):
+    """A 'solver' whose error is known: a/N^2 in space (N: the section's elements along its
+    refinable axis), b dt^2 in time, c/H^2 in the harmonics."""
+    def run(solver, case):
+        n = len(case.section.s.grid(case.mesh_scale)) - 1
+        t = np.arange(0.0, 1e-3 + case.dt / 2, case.dt)
+        err = a / n ** 2 + b * case.dt ** 2 + c / case.harmonics ** 2
+        hist = {p.name: np.sin(2e3 * t) * (1 + err) for p in case.probes}
+        return SimpleNamespace(t=t, history=hist, cpu_time_s=0.01, converged=True, message="")
+    return run, (lambda case: a / (len(case.section.s.grid(case.mesh_scale)) - 1) ** 2), \
+        (lambda case: b * case.dt ** 2), (lambda case: c / case.harmonics ** 2)
+
+
+def test_each_part_is_recovered_when_the_orders_hold():
+    run, space, time, harmonics = _fake_solver()
+    case = get_case("thick_cylinder", {"refine": 2, "dt": 1e-5, "t_end": 1e-3})
+    est = E.estimate(case, SMFEM, run(SMFEM, case), run=run)
+    coarse = get_case("thick_cylinder", {"refine": 1, "dt": 1e-5, "t_end": 1e-3})
+    for probe, parts in est["probes"].items():
+        # the relative max-norm of (1 + e_f) - (1 + e_c) over 1 + e_f: within the e's own size
+        assert parts["space"] == pytest.approx(space(case), rel=0.1)
+        assert parts["time"] == pytest.approx(time(coarse), rel=0.1)  # measured on the coarse mesh
+        assert parts["harmonics"] == pytest.approx(harmonics(coarse), rel=0.1)
+        assert parts["total"] == pytest.approx(parts["space"] + parts["time"] + parts["harmonics"])
+        assert parts["orders"] == pytest.approx({"space": 2.0, "time": 2.0, "harmonics": 2.0}, rel=0.05)  # observed
+    assert est["companions_cpu_total_s"] == pytest.approx(0.05)
+
+
+def test_smfem_run_writes_its_estimate_and_prints_one_line(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["run", "thick_cylinder", "--out", str(out), "--quiet", "--no-fields"]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    est = json.loads((out / "summary.json").read_text())["error_estimate"]
+    assert est["method"] == "companions" and set(est["probes"]) == {"A_ur", "B_ut", "C_ur"}
+    assert all(math.isfinite(v["total"]) and v["total"] > 0 for v in est["probes"].values())
+    assert len(printed) == 2 and printed[1].startswith("thick_cylinder (smfem): estimated error ")
+    assert "space" in printed[1] and "time" in printed[1] and "harmonics" in printed[1]
+    assert main(["run", "thick_cylinder", "--out", str(tmp_path / "off"), "--quiet", "--no-fields",
+                 "--estimate", "off"]) == 0
+    assert "error_estimate" not in json.loads((tmp_path / "off" / "summary.json").read_text())
+
+
+def test_a_scene_file_gets_an_estimate(tmp_path, capsys):
+    scene = tmp_path / "strip.toml"
+    text = (EXAMPLES / "notched_strip.toml").read_text()
+    scene.write_text(text.replace("notch_depth = 0.025", "notch_depth = 0.015").replace("harmonics = 120", "harmonics = 40")
+                     .replace("t_end = 3.2e-4", "t_end = 6.4e-5"))
+    assert main(["run", str(scene), "--out", str(tmp_path / "run"), "--quiet", "--no-fields"]) == 0
+    est = json.loads((tmp_path / "run" / "summary.json").read_text())["error_estimate"]
+    assert {"space", "time", "harmonics"} <= set(est["companions"]) and est["probes"]["mid_uz"]["total"] > 0
+    assert "estimated error" in capsys.readouterr().out
+
+
+def test_no_accuracy_is_claimed_outside_the_model(tmp_path):
+    assert main(["run", "thick_cylinder", "--set", "plastic=true", "--set", "q=5e8", "--out", str(tmp_path),
+                 "--quiet"]) == 0
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert not summary["validity"]["valid"] and summary["error_estimate"]["claim"].startswith("none")
+
+
+def test_tol_refines_until_the_estimate_meets_the_target(tmp_path, capsys):
+    out = tmp_path / "tol"
+    args = ["run", "thick_cylinder", "--set", "t_end=1.6e-3", "--tol", "5%", "--out", str(out), "--quiet", "--no-fields"]
+    assert main(args) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    tol = summary["tolerance"]
+    assert tol["met"] and tol["target"] == 0.05 and len(tol["runs"]) >= 2  # the case's settings do not reach 5 %
+    assert tol["runs"][-1]["estimate"] <= 0.05 < tol["runs"][0]["estimate"]
+    assert max(v["total"] for k, v in summary["error_estimate"]["probes"].items()) <= 0.05
+    assert "--tol 5 % met" in capsys.readouterr().out.splitlines()[-1]
+
+
+def test_tol_says_in_one_line_when_the_budget_is_too_small(tmp_path, capsys):
+    out = tmp_path / "tol"
+    assert main(["run", "thick_cylinder", "--set", "t_end=1.6e-3", "--tol", "0.5%", "--max-cpu", "0.05",
+                 "--out", str(out), "--quiet", "--no-fields"]) == 3
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(err) == 1 and "not met within --max-cpu" in err[0] and (out / "summary.json").exists()
+
+
+@pytest.mark.parametrize("tol, words", [("0.01%", "below three times"), ("abc", "give a relative accuracy"),
+                                        ("150%", "between 0 and 100")])
+def test_tol_refuses_what_cannot_be_shown_or_read(tmp_path, capsys, tol, words):
+    assert main(["run", "thick_cylinder", "--tol", tol, "--out", str(tmp_path / "x"), "--quiet"]) == 2
+    assert words in capsys.readouterr().err
+    assert not (tmp_path / "x" / "summary.json").exists()
