@@ -131,3 +131,21 @@ def test_tol_refuses_what_cannot_be_shown_or_read(tmp_path, capsys, tol, words):
     assert main(["run", "thick_cylinder", "--tol", tol, "--out", str(tmp_path / "x"), "--quiet"]) == 2
     assert words in capsys.readouterr().err
     assert not (tmp_path / "x" / "summary.json").exists()
+
+
+def test_a_part_whose_coarser_companions_do_not_converge_is_measured_upward():
+    """Harmonics with a cliff (a notch not represented below 15 terms): the run's 20 converge,
+    its companions' 10 and 5 do not; the part comes from 30 terms instead, within [0.8, 3]."""
+    def run(solver, case):
+        n = len(case.section.s.grid(case.mesh_scale)) - 1
+        t = np.arange(0.0, 1e-3 + case.dt / 2, case.dt)
+        h = 4.0 / case.harmonics ** 2 if case.harmonics >= 15 else 0.5
+        err = 0.3 / n ** 2 + 2e5 * case.dt ** 2 + h
+        return SimpleNamespace(t=t, history={p.name: np.sin(2e3 * t) * (1 + err) for p in case.probes},
+                               cpu_time_s=0.01, converged=True, message="")
+    case = get_case("thick_cylinder", {"dt": 1e-5, "t_end": 1e-3})
+    est = E.estimate(case, SMFEM, run(SMFEM, case), run=run)
+    assert est["measured_upward"] == ["harmonics"] and est["companions"]["harmonics_up"]["harmonics"] == 30
+    actual = 4.0 / 20 ** 2
+    for parts in est["probes"].values():
+        assert 0.8 < parts["harmonics"] / actual < 3 and parts["orders"]["harmonics"] == 1.0
