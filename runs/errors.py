@@ -68,7 +68,8 @@ def history_errors(t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarra
     if len(grid) < 2 or not np.any(b):
         return math.nan, math.nan
     d = a - b
-    l2 = math.sqrt(trapezoid(d * d, grid) / trapezoid(b * b, grid))
+    norm = trapezoid(b * b, grid)  # 0 where b is non-zero at a single end sample only
+    l2 = math.sqrt(trapezoid(d * d, grid) / norm) if norm > 0 else math.nan
     return float(np.abs(d).max() / np.abs(b).max()), l2
 
 

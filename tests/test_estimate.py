@@ -149,3 +149,17 @@ def test_a_part_whose_coarser_companions_do_not_converge_is_measured_upward():
     actual = 4.0 / 20 ** 2
     for parts in est["probes"].values():
         assert 0.8 < parts["harmonics"] / actual < 3 and parts["orders"]["harmonics"] == 1.0
+
+
+def test_the_difference_of_histories_too_small_to_square_is_still_measured():
+    """Displacements of 1e-200 (a valid but extreme scene) underflow when squared: the max-norm
+    is still measured, the L2 norm is NaN, and no warning is raised."""
+    import warnings
+
+    from runs.errors import history_errors
+
+    t = np.linspace(0.0, 1.0, 11)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        e_max, e_l2 = history_errors(t, 1.1e-200 * np.sin(t), t, 1e-200 * np.sin(t))
+    assert e_max == pytest.approx(0.1) and math.isnan(e_l2)
