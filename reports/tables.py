@@ -34,8 +34,18 @@ def runs_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
                          "cpu_time_s": s.get("cpu_time_s"), "wall_time_s": s.get("wall_time_s"),
                          "iterations_mean": (s.get("iterations") or {}).get("mean"),
                          "iterations_max": (s.get("iterations") or {}).get("max"),
+                         "inside_model": inside_model(s.get("validity")),
                          "message": run.message, "directory": str(run.path or "")})
     return pd.DataFrame(rows)
+
+
+def inside_model(validity: dict | None) -> str:
+    """``yes``, or what leaves the small-strain model (runs.validity), for the runs table."""
+    if not validity:
+        return ""
+    if validity.get("valid"):
+        return "yes"
+    return "no: " + ", ".join(f"{k} {validity[k]:.3g}" for k in validity.get("exceeded", ()))
 
 
 def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | None,
@@ -166,5 +176,5 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "orders.csv: observed orders (log-log fit of the headline measure against dt or the mesh);\n"
         "  reading: what an order below 0.5 or negative means\n"
         "published.csv: extrema found near published extrema\n"
-        "runs.csv: every run (series, same-dt reference, truth levels), its status, size and cost\n")
+        "runs.csv: every run (series, same-dt reference, truth levels), its status, size and cost, and inside_model: yes, or which small-strain limit it passes (runs.validity)\n")
     return tables

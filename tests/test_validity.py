@@ -75,3 +75,11 @@ def test_the_collapsed_dome_is_outside_the_model(tmp_path, capsys):
     assert not v["valid"] and "displacement_ratio" in v["exceeded"] and v["from"].startswith("probes only")
     assert v["displacement_ratio"] > 1 and math.isfinite(v["largest_displacement"])
     assert "outside the small-strain model" in capsys.readouterr().err
+
+
+def test_the_report_runs_table_marks_a_run_outside_the_model():
+    from reports.tables import inside_model
+
+    assert inside_model({"valid": True, "exceeded": []}) == "yes" and inside_model(None) == ""
+    marked = inside_model({"valid": False, "exceeded": ["strain", "rotation"], "strain": 0.54, "rotation": 0.5})
+    assert marked == "no: strain 0.54, rotation 0.5"
