@@ -51,18 +51,15 @@ def command(args) -> int:
         raise UsageError("--every: the time series is written by smfem and reference only")
     if args.tol is not None:
         return _to_tolerance(case, args, out)
-    bar = Progress(case.n_steps, f"{case.name} ({args.solver})", "step", enabled=not args.quiet, leave=False)
     wall0 = time.perf_counter()
-    try:
-        result = solve(args.solver, case, progress=lambda step, n: bar.update(step),
-                       fields=not args.no_fields, every=args.every)
-    finally:
-        bar.close()
+    result = _solve(args.solver, case, f"{case.name} ({args.solver})", args.quiet,
+                    fields=not args.no_fields, every=args.every)
     wall = time.perf_counter() - wall0
     check = validity.check(case, result)
     est = None
     if args.estimate == "on" and result.converged and args.solver in ESTIMATED:
-        est = estimate(case, args.solver, result, run=_companion_runner(args.quiet))
+        est = estimate(case, args.solver, result, run=lambda solver, companion: _solve(
+            solver, companion, f"{companion.name} ({solver}, error-estimate companion)", args.quiet))
         if not check["valid"]:  # the companions measure the discretization of a model that does not hold
             est = {**est, "claim": "none: the run is outside the small-strain model (validity)"}
     written = write_run(out, case, args.solver, result, wall,
@@ -80,16 +77,13 @@ def command(args) -> int:
     return 0
 
 
-def _companion_runner(quiet: bool):
-    """The estimate's companion runs, with a line (or bar) per companion."""
-    def run(solver, case):
-        bar = Progress(case.n_steps, f"{case.name} ({solver}, error-estimate companion)", "step",
-                       enabled=not quiet, leave=False)
-        try:
-            return solve(solver, case, progress=lambda step, n: bar.update(step))
-        finally:
-            bar.close()
-    return run
+def _solve(solver: str, case, title: str, quiet: bool, **options):
+    """``solve`` with a progress bar (or lines) titled ``title``."""
+    bar = Progress(case.n_steps, title, "step", enabled=not quiet, leave=False)
+    try:
+        return solve(solver, case, progress=lambda step, n: bar.update(step), **options)
+    finally:
+        bar.close()
 
 
 #: parameters that choose the discretization, not the problem

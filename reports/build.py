@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from runs import zones
-from runs.figures import plane_labels, plastic_zones
+from runs.figures import plastic_zones
 
 from . import figures, stability  # noqa: F401  (importing stability registers its section)
 from .analysis import CaseAnalysis, analyse
@@ -51,8 +51,7 @@ def case_figures(an: CaseAnalysis, out: Path) -> dict[str, str]:
         rows = _zone_rows(an)
         if rows:
             made["plastic_zones"] = f"figures/{name}-plastic-zones.png"
-            plastic_zones(rows, out / made["plastic_zones"], f"{name}: plastic zones at the paper's times",
-                          plane_labels(an.case), an.case.unit_of("u"))
+            plastic_zones(rows, out / made["plastic_zones"], f"{name}: plastic zones at the paper's times", an.case)
         if (run.path / "fields.vtu").exists():
             made["vtu"] = f"fields/{name}-smfem.vtu"
             (out / "fields").mkdir(exist_ok=True)

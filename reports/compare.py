@@ -19,7 +19,7 @@ import pandas as pd
 
 from runs.errors import probe_error
 from runs.files import write_run
-from runs.figures import plane_labels, plastic_zones, plt, save
+from runs.figures import plastic_zones, plt, save
 from runs.registry import REFERENCE, SMFEM, solve
 from runs.zones import plastic_area
 
@@ -68,6 +68,5 @@ def compare(smfem_case, reference_case, out: Path, progress=None) -> pd.DataFram
     _histories_figure(smfem_case, s, r, out / "histories.png")
     if s.snapshots and r.snapshots:
         plastic_zones({"SMFEM": s.snapshots, "reference FEM": r.snapshots}, out / "plastic_zones.png",
-                      f"{smfem_case.name}: plastic zones (equivalent plastic strain >= 0.1 %)",
-                      plane_labels(smfem_case), smfem_case.unit_of("u"))
+                      f"{smfem_case.name}: plastic zones (equivalent plastic strain >= 0.1 %)", smfem_case)
     return table

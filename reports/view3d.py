@@ -19,10 +19,9 @@ def render_field(vtu: Path, png: Path, title: str, length_unit: str) -> Path:
     import pyvista as pv
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
+    from vtkmodules.vtkCommonCore import vtkLogger
 
     from runs.figures import save
-
-    from vtkmodules.vtkCommonCore import vtkLogger
 
     # off-screen rendering needs no X server, but VTK warns about the missing one on every run
     vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)

@@ -73,12 +73,14 @@ def history_errors(t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarra
     return float(np.abs(d).max() / np.abs(b).max()), l2
 
 
-def probe_error(name: str, t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarray) -> tuple[str, float]:
+def probe_error(name: str, t: np.ndarray, a: np.ndarray, t_ref: np.ndarray, b: np.ndarray,
+                window: float = 0.0) -> tuple[str, float]:
     """Which measure applies to probe ``name`` and its value, for ``a`` against ``b``: the
     relative difference of the peaks for plastic strains (``peps*``), which sit on a point
-    whose history is a ramp; else the relative max-norm of :func:`history_errors`."""
+    whose history is a ramp; else the relative max-norm of :func:`history_errors` (through
+    ``window``)."""
     if name.startswith("peps"):
         end = min(t[-1], t_ref[-1]) * (1 + 1e-12)
         pa, pb = np.max(a[t <= end]), np.max(b[t_ref <= end])
         return "peak difference", float((pa - pb) / pb) if pb > 0 else math.nan
-    return "max-norm", history_errors(t, a, t_ref, b)[0]
+    return "max-norm", history_errors(t, a, t_ref, b, window)[0]

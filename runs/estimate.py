@@ -35,7 +35,7 @@ import numpy as np
 
 from cases import rebuild
 
-from .errors import history_errors, probe_error
+from .errors import probe_error
 from .registry import REF2D, REF3D, REFERENCE, SMFEM, solve
 
 #: the solvers an estimate is made for: time-stepping on a mesh (the modal truth is exact in
@@ -112,15 +112,8 @@ def _ratio(part: str, a, b) -> float:
 def _differences(case, a, b) -> dict[str, float]:
     """|difference| per probe of two results, as every comparison measures it (relative to ``a``)."""
     window = case.references.get("comparison_window_s", 0.0)
-    out = {}
-    for name, values in a.history.items():
-        if name not in b.history:
-            continue
-        if name.startswith("peps"):
-            out[name] = abs(probe_error(name, b.t, b.history[name], a.t, values)[1])
-        else:
-            out[name] = history_errors(b.t, b.history[name], a.t, values, window)[0]
-    return out
+    return {name: abs(probe_error(name, b.t, b.history[name], a.t, values, window)[1])
+            for name, values in a.history.items() if name in b.history}
 
 
 def observed_order(d_fine: float, d_coarse: float, ratio: float) -> float:
@@ -154,13 +147,21 @@ def estimate(case, solver: str, result, run=solve) -> dict:
     if not comps:
         return {"method": f"none: no estimate for {solver} (it is made for {', '.join(ESTIMATED)})"}
     results, cases, cpu = {"run": result}, {"run": case}, {}
-    for c in comps:
+
+    def made(c: Companion) -> bool:
+        """Run companion ``c``; whether it finished."""
         cases[c.name] = rebuild(case, c.overrides)
         results[c.name] = run(solver, cases[c.name])
         cpu[c.name] = float(results[c.name].cpu_time_s)
-        if not results[c.name].converged:
-            return {"method": "companions", "failed": f"the {c.name} companion did not finish: {results[c.name].message}",
-                    "companions_cpu_s": cpu}
+        return results[c.name].converged
+
+    def failed(c: Companion) -> dict:
+        return {"method": "companions", "failed": f"the {c.name} companion did not finish: {results[c.name].message}",
+                "companions_cpu_s": cpu}
+
+    for c in comps:
+        if not made(c):
+            return failed(c)
     by_name = {c.name: c for c in comps}
     diffs = {c.name: _differences(case, results[c.against], results[c.name]) for c in comps}
     # a part whose coarser pair does not converge on a headline probe is measured on the finer side
@@ -171,12 +172,8 @@ def estimate(case, solver: str, result, run=solve) -> dict:
         if any(not asymptotic(diffs[part][n], diffs[f"{part}2"].get(n, math.nan), ratio)
                for n in diffs[part] if fields.get(n) in ("u", "v")):
             c = finer_companion(case, part, by_name["space"].overrides)
-            cases[c.name] = rebuild(case, c.overrides)
-            results[c.name] = run(solver, cases[c.name])
-            cpu[c.name] = float(results[c.name].cpu_time_s)
-            if not results[c.name].converged:
-                return {"method": "companions", "failed": f"the {c.name} companion did not finish: "
-                        f"{results[c.name].message}", "companions_cpu_s": cpu}
+            if not made(c):
+                return failed(c)
             comps.append(c)
             by_name[c.name] = c
             diffs[c.name] = _differences(case, results[c.against], results[c.name])

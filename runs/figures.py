@@ -21,7 +21,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
 from matplotlib.legend import Legend  # noqa: E402
-from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.text import Annotation, Text  # noqa: E402
 
 from .zones import THRESHOLD, plastic_area  # noqa: E402
@@ -158,14 +157,14 @@ def plane_labels(case) -> tuple[str, str]:
     return f"x3 (along the prism), {unit}", f"height, {unit}"
 
 
-def plastic_zones(rows: dict[str, list[dict]], path: Path, title: str, axes_labels: tuple[str, str],
-                  length_unit: str) -> Path:
+def plastic_zones(rows: dict[str, list[dict]], path: Path, title: str, case) -> Path:
     """One row of panels per solver (label -> snapshots of :mod:`runs.zones`), one panel per
     time: cells whose mean equivalent plastic strain reaches 0.1 % coloured by it on one scale
     for all rows, each panel titled with the zone's area and the largest point value (what the
     ``peps_max`` probe gives: it passes 0.1 % before a cell's mean does, so both are named);
     cut-out cells (a snapshot's ``solid`` = 0) filled in every row, so the reference's holes
-    are drawn as well."""
+    are drawn as well. Axes and areas in ``case``'s length unit."""
+    axes_labels, length_unit = plane_labels(case), case.unit_of("u")
     rows = {label: snaps for label, snaps in rows.items() if snaps}
     vmax = max([100 * s["peps"].max() for snaps in rows.values() for s in snaps] + [0.2])
     ncol = max(len(snaps) for snaps in rows.values())

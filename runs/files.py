@@ -82,11 +82,10 @@ def write_run(out: Path, case, solver: str, result, wall_time_s: float, zone_fig
     if getattr(result, "frames", None):
         write_series(out, result.frames)
     if getattr(result, "snapshots", None):
-        from .figures import plane_labels, plastic_zones
+        from .figures import plastic_zones
         from .zones import save
 
         save(result.snapshots, out / "plastic_zones.npz")
         if zone_figure:
-            plastic_zones({solver: result.snapshots}, out / "plastic_zones.png", f"{case.name}: plastic zones",
-                          plane_labels(case), case.unit_of("u"))
+            plastic_zones({solver: result.snapshots}, out / "plastic_zones.png", f"{case.name}: plastic zones", case)
     return written
