@@ -148,7 +148,7 @@ def test_a_part_whose_coarser_companions_do_not_converge_is_measured_upward():
     assert est["measured_upward"] == ["harmonics"] and est["companions"]["harmonics_up"]["harmonics"] == 30
     actual = 4.0 / 20 ** 2
     for parts in est["probes"].values():
-        assert 0.8 < parts["harmonics"] / actual < 3 and parts["orders"]["harmonics"] == 1.0
+        assert 0.8 < parts["harmonics"] / actual < 3 and parts["orders"]["harmonics"] == E.ORDERS["harmonics"]
 
 
 def test_the_difference_of_histories_too_small_to_square_is_still_measured():
