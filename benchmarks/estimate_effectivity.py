@@ -22,6 +22,7 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from cases import CASES, get_case  # noqa: E402
+from reports.effectivity import settings  # noqa: E402
 from reports.metrics import TRUTH_MARGIN  # noqa: E402
 from reports.stored import directory, read  # noqa: E402
 from runs import threads  # noqa: E402
@@ -31,10 +32,9 @@ from runs.registry import REF2D, SMFEM, solve  # noqa: E402
 
 
 def settings_of(name: str, tiny: bool = False) -> dict[str, dict]:
-    dt = get_case(name).dt
     if tiny:  # the test suite's size: a tenth of the window, the defaults only
         return {"defaults (t_end / 10)": {"t_end": get_case(name).t_end / 10}}
-    return {"defaults": {}, "refine 2": {"refine": 2}, "dt/2": {"dt": dt / 2}}
+    return settings(name)  # the report's
 
 
 def rows_for(name: str, solver: str, label: str, overrides: dict, truth) -> list[dict]:

@@ -13,7 +13,7 @@ import pandas as pd
 
 from cases import get_case
 
-from . import metrics
+from . import effectivity, metrics
 from .jobs import NOT_AVAILABLE, OK
 from .plan import SOLVERS
 from .references import best_history, published_points
@@ -66,6 +66,8 @@ class CaseAnalysis:
     solvers: dict
     orders: pd.DataFrame
     published: pd.DataFrame
+    #: the error estimates against the truth (:mod:`reports.effectivity`)
+    effectivity: pd.DataFrame = field(default_factory=pd.DataFrame)
 
     @property
     def available(self) -> bool:
@@ -218,4 +220,5 @@ def analyse(cr: CaseRuns) -> CaseAnalysis:
                   for s in SOLVERS if s in cr.series}
     an.orders = pd.DataFrame([row for solver, s in an.solvers.items() for row in _orders(case, solver, s)])
     an.published = pd.DataFrame(_published_rows(case, cr, points))
+    an.effectivity = pd.DataFrame(effectivity.rows(case, cr.truth, cr.estimates))
     return an

@@ -7,6 +7,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import pandas as pd
+
 from runs import zones
 from runs.figures import plastic_zones
 
@@ -93,8 +95,12 @@ def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = No
     analyses = [analyse(cr) for cr in study.cases]
     tables = write_tables(analyses, out / "tables")
     figs = {an.case.name: case_figures(an, out) for an in analyses}
+    overall = {}
+    if tables["effectivity"].get("effectivity", pd.Series(dtype=float)).notna().any():
+        overall["effectivity"] = "figures/effectivity.png"
+        figures.effectivity(tables["effectivity"], out / overall["effectivity"])
     if document:
-        ctx = ReportContext(analyses, tables, figs, study, settings, out)
+        ctx = ReportContext(analyses, tables, figs, study, settings, out, overall)
         subtitle = (f"{settings} settings; cases: {', '.join(an.case.name for an in analyses)}; "
                     "built by: smfem report")
         html = render_html(build_sections(ctx), TITLE, subtitle)

@@ -15,6 +15,7 @@ import numpy as np  # noqa: E402
 from runs.figures import place_labels, save  # noqa: E402
 
 from .analysis import CaseAnalysis  # noqa: E402
+from .effectivity import BAND  # noqa: E402
 from .metrics import TARGETS, TRUTH_MARGIN, smoothed  # noqa: E402
 from .plan import CALCULIX, REF2D, REF3D, SMFEM  # noqa: E402
 from .references import published_points, theory_curves  # noqa: E402
@@ -155,3 +156,30 @@ def histories(an: CaseAnalysis, path: Path) -> Path:
     fig.tight_layout()
     return save(fig, path)
 
+
+
+#: marker per estimated setting (:func:`reports.effectivity.settings`); the colour is the solver's
+SETTING_MARKER = {"defaults": "o", "refine 2": "s", "dt/2": "^"}
+
+
+def effectivity(table, path: Path) -> Path:
+    """Every judged estimate's effectivity (estimate / actual error) per scene, solver and
+    setting, on a log axis with the honest band shaded."""
+    fig, ax = _axes(4.2)
+    judged = table.dropna(subset=["effectivity"])
+    names = list(dict.fromkeys(table.case))
+    solvers = list(dict.fromkeys(table.solver))
+    ax.axhspan(*BAND, color="0.85", zorder=0, label=f"honest: {BAND[0]:g} ... {BAND[1]:g}")
+    ax.axhline(1.0, color="0.5", lw=0.8)
+    for k, solver in enumerate(solvers):
+        for j, (setting, marker) in enumerate(SETTING_MARKER.items()):
+            rows = judged[(judged.solver == solver) & (judged.setting == setting)]
+            x = [names.index(c) + 0.3 * (k - (len(solvers) - 1) / 2) + 0.07 * (j - 1) for c in rows.case]
+            ax.plot(x, rows.effectivity, ls="none", marker=marker, color=STYLE[solver]["color"], ms=5, mfc="none",
+                    label=f"{LABEL[solver]}, {setting}")
+    ax.set_xticks(range(len(names)), names, fontsize=7)
+    ax.set(yscale="log", ylabel="effectivity (estimate / actual error), -", xlim=(-0.6, len(names) - 0.4))
+    lo, hi = ax.get_ylim()
+    ax.set_ylim(min(lo, 0.1), max(hi, 10))
+    return _save(fig, ax, path, "Each run's error estimate against its actual error (displacement and velocity "
+                 "probes whose truth is fine enough)")

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from cases import get_case
 from runs.progress import Progress
 
+from . import effectivity
 from .cache import Run, RunCache
 from .executors import run_jobs
 from .jobs import Job
@@ -29,6 +30,8 @@ class CaseRuns:
     fields: Run | None
     truth: Truth | None = None
     truth_runs: dict = field(default_factory=dict)
+    #: (solver, setting) -> (run, its error_estimate): :mod:`reports.effectivity`
+    estimates: dict = field(default_factory=dict)
 
     def all_runs(self) -> list[Run]:
         return [r for runs in self.series.values() for r in runs] + [self.reference, *self.truth_runs.values()]
@@ -52,10 +55,9 @@ def stored_truth(study: CaseStudy) -> tuple[Truth | None, str]:
     return find_stored(study.case, get_case(study.case, study.base), plan_for(study.case, study.base, "full"))
 
 
-def _jobs(study: CaseStudy, stored: bool) -> tuple[dict, Job, Job, dict]:
-    """Jobs of the series, of the reference run, of the SMFEM run at the case's settings,
-    which writes fields.vtu (the series run with those parameters, when there is one), and of
-    the truth by role (none when a ``stored`` truth stands in)."""
+def job_of(study: CaseStudy):
+    """``job(solver, level)``: the study's job of a level. The SMFEM run at the case's own
+    settings writes fields.vtu, whichever level resolves to them."""
     def params(level):
         return get_case(study.case, {**study.base, **level}).params
 
@@ -64,7 +66,14 @@ def _jobs(study: CaseStudy, stored: bool) -> tuple[dict, Job, Job, dict]:
     def job(solver, level):
         return Job.make(study.case, solver, {**study.base, **level},
                         fields=solver == SMFEM and params(level) == shown)
+    return job
 
+
+def _jobs(study: CaseStudy, stored: bool) -> tuple[dict, Job, Job, dict]:
+    """Jobs of the series, of the reference run, of the SMFEM run at the case's settings,
+    which writes fields.vtu (the series run with those parameters, when there is one), and of
+    the truth by role (none when a ``stored`` truth stands in)."""
+    job = job_of(study)
     series = {s.solver: [job(s.solver, level) for level in s.levels] for s in study.series}
     fields = next((j for j in series.get(SMFEM, ()) if j.fields), None) or job(SMFEM, {})
     truth = truth_jobs(study.case, study.truth, study.base) if study.truth and not stored else {}
@@ -111,9 +120,21 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
     wall0 = time.perf_counter()
     stored = {study.case: stored_truth(study) for study in plan}
     layout = [(study, *_jobs(study, stored[study.case][0] is not None)) for study in plan]
+    estimated = {study.case: effectivity.planned(study, job_of(study)) for study in plan}
     every = [job for _, series, ref, fields, truth in layout
              for job in [*sum(series.values(), []), ref, fields, *truth.values()]]
+    every += [j for jobs in estimated.values() for run, comps in jobs.values() for j in [run, *comps]]
     runs, executed, cached = run_cached(every, cache, scheduler, workers, progress)
+
+    def fetch(job: Job) -> Run:
+        """A run of the study, or one an estimate asks for after seeing the others."""
+        nonlocal cached
+        if job not in runs:
+            found, more, hits = run_cached([job], cache, scheduler, workers, progress=False)
+            runs.update(found)
+            executed.extend(more)
+            cached += hits
+        return runs[job]
     cases = []
     for study, series, ref, fields, truth in layout:
         truth_runs = {role: runs[j] for role, j in truth.items()}
@@ -123,5 +144,5 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
             if made is not None:
                 made.source = f"computed by this study ({why})"
         cases.append(CaseRuns(study, {s: [runs[j] for j in js] for s, js in series.items()}, runs[ref], runs[fields],
-                              made, truth_runs))
+                              made, truth_runs, effectivity.measure(study, estimated[study.case], fetch)))
     return StudyResult(cases, executed=executed, cached=cached, wall_time_s=time.perf_counter() - wall0)

@@ -11,6 +11,7 @@ from . import metrics
 from .analysis import FAMILIES, HEADLINE_MEASURE, CaseAnalysis
 from .calibration import FLOOR, SHARPNESS
 from .calibration import table as calibration_table
+from .effectivity import BAND
 from .jobs import NOT_INSTALLED, OK
 from .plan import SMFEM
 from .truth import PARTS
@@ -27,6 +28,7 @@ def runs_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
         tagged = [(s, "series", r) for s, runs in an.runs.series.items() for r in runs]
         tagged.append((an.runs.reference.job.solver, "same-dt reference", an.runs.reference))
         tagged += [(r.job.solver, f"truth: {role[0]} {role[1]}", r) for role, r in an.runs.truth_runs.items()]
+        estimated = _estimated_errors(an)
         for solver, role, run in tagged:
             s = run.summary or {}
             rows.append({"case": an.case.name, "solver": solver, "role": role, "level": run.label,
@@ -35,8 +37,26 @@ def runs_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
                          "iterations_mean": (s.get("iterations") or {}).get("mean"),
                          "iterations_max": (s.get("iterations") or {}).get("max"),
                          "inside_model": inside_model(s.get("validity")),
+                         "estimated_error": estimated.get(run.path, math.nan),
                          "message": run.message, "directory": str(run.path or "")})
     return pd.DataFrame(rows)
+
+
+def _estimated_errors(an: CaseAnalysis) -> dict:
+    """Per estimated run's directory: its estimated error in the headline measure (the largest
+    over its displacement and velocity probes)."""
+    out = {}
+    for run, est in an.runs.estimates.values():
+        totals = [v["total"] for k, v in est.get("probes", {}).items() if k in an.headline_probes]
+        if totals:
+            out[run.path] = max(totals)
+    return out
+
+
+def effectivity_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
+    """Every measured estimate against the truth (:mod:`reports.effectivity`)."""
+    frames = [an.effectivity for an in analyses if len(an.effectivity)]
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
 
 def inside_model(validity: dict | None) -> str:
@@ -156,6 +176,7 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "errors": pd.concat([an.errors for an in analyses], ignore_index=True),
         "orders": pd.concat([an.orders for an in analyses], ignore_index=True),
         "published": pd.concat([an.published for an in analyses], ignore_index=True),
+        "effectivity": effectivity_table(analyses),
     }
     for name, table in tables.items():
         table.to_csv(out / f"{name}.csv", index=False, float_format="%.6g")
@@ -176,5 +197,10 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "orders.csv: observed orders (log-log fit of the headline measure against dt or the mesh);\n"
         "  reading: what an order below 0.5 or negative means\n"
         "published.csv: extrema found near published extrema\n"
-        "runs.csv: every run (series, same-dt reference, truth levels), its status, size and cost, and inside_model: yes, or which small-strain limit it passes (runs.validity)\n")
+        "runs.csv: every run (series, same-dt reference, truth levels), its status, size and cost, and inside_model: yes, or which small-strain limit it passes (runs.validity);\n"
+        "  estimated_error: the run's own error estimate (runs.estimate), where the study measured it\n"
+        "effectivity.csv: per solver, setting (defaults, refine 2, dt/2) and displacement or velocity probe, the\n"
+        "  run's error estimate and its parts, its actual error against the truth and effectivity = estimate /\n"
+        f"  actual (where the actual error exceeds {metrics.TRUTH_MARGIN:g} truth uncertainties); honest within "
+        f"[{BAND[0]:g}, {BAND[1]:g}]\n")
     return tables

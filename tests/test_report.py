@@ -31,7 +31,8 @@ TINY = (
         Series(REF2D, grid("dome", ({"refine": 1}, {"refine": 2}), (1, 2))),
         Series(REF3D, ({"refine": 1},)),
         Series(CALCULIX, ({},)),
-    ), reference=(REF2D, {"refine": 4}), truth=TruthPlan(MODAL_TRUTH, refine=(1, 2, 4)), base={"t_end": 4e-5}),
+    ), reference=(REF2D, {"refine": 4}), truth=TruthPlan(MODAL_TRUTH, refine=(1, 2, 4)), base={"t_end": 4e-5},
+        estimated=(SMFEM, REF2D)),
     CaseStudy("thick_cylinder", (
         Series(SMFEM, grid("thick_cylinder", ({"harmonics": 4}, {"harmonics": 10}, {"refine": 2, "harmonics": 20}),
                            (1, 2))),
@@ -70,6 +71,24 @@ def test_tiny_report_has_a_figure_per_case_the_headline_and_the_tables(tiny):
     assert (runs.status == "ok").all() and (runs.cpu_time_s > 0).all()
     # by role: dome space 1, 2, 4; thick cylinder space 1, 2 (H20) and harmonics 10, 20 (r2)
     assert runs.role.str.startswith("truth").sum() == 7
+
+
+def test_each_estimated_run_states_its_error_against_the_truth(tiny):
+    """The dome's SMFEM and 2D runs at three settings, each estimated from its companions (run
+    through the study's cache) and set against the truth: the table, the figure, the section,
+    and the estimate in the runs table."""
+    eff = pd.read_csv(tiny.out / "tables" / "effectivity.csv")
+    assert set(eff.case) == {"dome"} and set(eff.solver) == {SMFEM, REF2D}
+    assert set(eff.setting) == {"defaults", "refine 2", "dt/2"} and set(eff.probe) == {"apex_uz"}
+    assert (eff.estimate > 0).all() and (eff.actual > 0).all()
+    judged = eff.dropna(subset=["effectivity"])
+    assert np.allclose(judged.effectivity, judged.estimate / judged.actual)
+    assert (tiny.out / "figures" / "effectivity.png").exists() == bool(len(judged))
+    assert "Error estimates against the truth" in (tiny.out / "index.html").read_text()
+    runs = pd.read_csv(tiny.out / "tables" / "runs.csv")
+    dome = runs[(runs.case == "dome") & (runs.role == "series")].set_index(["solver", "level"])
+    for row in eff[eff.setting == "defaults"].itertuples():
+        assert dome.loc[(row.solver, row.level), "estimated_error"].max() == pytest.approx(row.estimate, rel=1e-4)
 
 
 def test_the_headline_is_the_cheapest_run_within_each_target_of_the_truth(tiny):
