@@ -3,8 +3,9 @@ over the run's actual error against the truth, per displacement and velocity pro
 
 A study estimates each of its ``estimated`` solvers at three settings (:func:`settings`): the
 case's defaults, twice its mesh, half its step. The runs and their companions are study jobs
-like any other, so they run in parallel and stay in the run cache; a companion the estimate
-asks for only after seeing the others (a part measured on the finer side) runs when asked.
+like any other, so they run in parallel and stay in the run cache; the companions an estimate
+asks for only after seeing the others (a part measured on the finer side) run in a second
+parallel round (:func:`asked`).
 """
 
 from __future__ import annotations
@@ -70,6 +71,23 @@ def measure(study, plan: dict, fetch) -> dict[tuple[str, str], tuple]:
 
         out[solver, label] = (run, estimate(case, solver, as_result(run), run=companion))
     return out
+
+
+def asked(study, plan: dict, runs: dict) -> list[Job]:
+    """The companions the estimates of ``plan`` ask for beyond ``runs`` (a part measured on the
+    finer side: known only once its coarser companions are in), so that they too run in
+    parallel. Each one asked for is answered with a run at hand; the estimate's arithmetic is
+    thrown away."""
+    missing, last = [], []
+
+    def fetch(job):
+        if job in runs:
+            last[:] = [runs[job]]
+        elif job not in missing:
+            missing.append(job)
+        return last[0]
+    measure(study, plan, fetch)
+    return missing
 
 
 def rows(case, truth, estimates: dict) -> list[dict]:

@@ -125,16 +125,11 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
              for job in [*sum(series.values(), []), ref, fields, *truth.values()]]
     every += [j for jobs in estimated.values() for run, comps in jobs.values() for j in [run, *comps]]
     runs, executed, cached = run_cached(every, cache, scheduler, workers, progress)
-
-    def fetch(job: Job) -> Run:
-        """A run of the study, or one an estimate asks for after seeing the others."""
-        nonlocal cached
-        if job not in runs:
-            found, more, hits = run_cached([job], cache, scheduler, workers, progress=False)
-            runs.update(found)
-            executed.extend(more)
-            cached += hits
-        return runs[job]
+    # the companions an estimate asks for once it has seen the others, in parallel too
+    later = [j for study in plan for j in effectivity.asked(study, estimated[study.case], runs)]
+    found, more, hits = run_cached(later, cache, scheduler, workers, progress)
+    runs.update(found)
+    executed, cached = executed + more, cached + hits
     cases = []
     for study, series, ref, fields, truth in layout:
         truth_runs = {role: runs[j] for role, j in truth.items()}
@@ -144,5 +139,5 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
             if made is not None:
                 made.source = f"computed by this study ({why})"
         cases.append(CaseRuns(study, {s: [runs[j] for j in js] for s, js in series.items()}, runs[ref], runs[fields],
-                              made, truth_runs, effectivity.measure(study, estimated[study.case], fetch)))
+                              made, truth_runs, effectivity.measure(study, estimated[study.case], runs.__getitem__)))
     return StudyResult(cases, executed=executed, cached=cached, wall_time_s=time.perf_counter() - wall0)
