@@ -22,12 +22,10 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from cases import CASES, get_case  # noqa: E402
-from reports.effectivity import settings  # noqa: E402
-from reports.metrics import TRUTH_MARGIN  # noqa: E402
+from reports.effectivity import judged, settings, summary  # noqa: E402
 from reports.stored import directory, read  # noqa: E402
 from runs import threads  # noqa: E402
-from runs.errors import history_errors  # noqa: E402
-from runs.estimate import PARTS, estimate  # noqa: E402
+from runs.estimate import estimate  # noqa: E402
 from runs.registry import REF2D, SMFEM, solve  # noqa: E402
 
 
@@ -43,21 +41,8 @@ def rows_for(name: str, solver: str, label: str, overrides: dict, truth) -> list
     result = solve(solver, case)
     est = estimate(case, solver, result)
     wall = time.perf_counter() - wall
-    fields = {p.name: p.field for p in case.probes}
-    out = []
-    for probe, parts in est.get("probes", {}).items():
-        if fields.get(probe) not in ("u", "v") or probe not in truth.values or not truth.converged(probe):
-            continue
-        actual = history_errors(result.t, result.history[probe], truth.t, truth.values[probe],
-                                truth.window)[0]
-        u = truth.uncertainty_of([probe])
-        out.append({"case": name, "solver": solver, "setting": label, "probe": probe, "actual": actual,
-                    "estimate": parts["total"], "effectivity": parts["total"] / actual if actual > 0 else float("nan"),
-                    **{f"est_{k}": parts[k] for k in PARTS if k in parts},
-                    **{f"order_{k}": v for k, v in parts["orders"].items()},
-                    "truth_fine_enough": actual > TRUTH_MARGIN * u, "run_cpu_s": result.cpu_time_s,
-                    "companions_cpu_s": est["companions_cpu_total_s"], "wall_s": wall})
-    return out
+    return [{"case": name, "solver": solver, "setting": label, **row, "wall_s": wall}
+            for row in judged(case, truth, result.t, result.history, est)]
 
 
 def main(argv=None) -> int:
@@ -80,10 +65,7 @@ def main(argv=None) -> int:
     table = pd.DataFrame(rows)
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     table.to_csv(args.out, index=False, float_format="%.4g")
-    judged = table[table.truth_fine_enough]
-    print(f"\neffectivity over {len(judged)} probes with a fine-enough truth: "
-          f"{judged.effectivity.min():.2f} ... {judged.effectivity.max():.2f}; "
-          f"outside [0.8, 3]: {int(((judged.effectivity < 0.8) | (judged.effectivity > 3)).sum())}")
+    print(f"\n{summary(table)}")
     print(f"companions' CPU / run CPU: {(table.companions_cpu_s / table.run_cpu_s).groupby(table.case).max().round(2).to_dict()}")
     return 0
 

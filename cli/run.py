@@ -55,18 +55,11 @@ def command(args) -> int:
     result = _solve(args.solver, case, f"{case.name} ({args.solver})", args.quiet,
                     fields=not args.no_fields, every=args.every)
     wall = time.perf_counter() - wall0
-    check = validity.check(case, result)
     est = None
     if args.estimate == "on" and result.converged and args.solver in ESTIMATED:
         est = estimate(case, args.solver, result, run=lambda solver, companion: _solve(
             solver, companion, f"{companion.name} ({solver}, error-estimate companion)", args.quiet))
-        if not check["valid"]:  # the companions measure the discretization of a model that does not hold
-            est = {**est, "claim": "none: the run is outside the small-strain model (validity)"}
-    written = write_run(out, case, args.solver, result, wall,
-                        extra={"validity": check, **({"error_estimate": est} if est else {})})
-    warning = validity.warning_line(case, written["validity"])
-    if warning:
-        print(warning, file=sys.stderr)
+    est = _write_checked(out, case, args.solver, result, wall, est)
     if not result.converged:
         print(f"smfem: {case.name}: {result.message}", file=sys.stderr)
         return EXIT_NOT_CONVERGED
@@ -75,6 +68,21 @@ def command(args) -> int:
     if est is not None:
         print(summary_line(case, args.solver, est))
     return 0
+
+
+def _write_checked(out: Path, case, solver: str, result, wall_s: float, est: dict | None, **extra) -> dict | None:
+    """Write the run with its validity and error estimate (no accuracy claimed for a run outside
+    the small-strain model: its companions measure the discretization of a model that does not
+    hold), print the validity warning if any; returns the estimate as written."""
+    check = validity.check(case, result)
+    if est is not None and not check["valid"]:
+        est = {**est, "claim": "none: the run is outside the small-strain model (validity)"}
+    write_run(out, case, solver, result, wall_s,
+              extra={"validity": check, **({"error_estimate": est} if est else {}), **extra})
+    warning = validity.warning_line(case, check)
+    if warning:
+        print(warning, file=sys.stderr)
+    return est
 
 
 def _solve(solver: str, case, title: str, quiet: bool, **options):
@@ -142,15 +150,10 @@ def _to_tolerance(case, args, out: Path) -> int:
         print(f"smfem: {case.name}: --tol: the first run did not finish", file=sys.stderr)
         return EXIT_NOT_CONVERGED
     best = found.best
-    check = validity.check(best.case, best.result)
     tolerance = {"target": target, "met": found.met, "runs": [
         {"settings": {"refine": a.case.refine, "harmonics": a.case.harmonics, "dt": a.case.dt},
          "estimate": a.error, "cpu_s": a.cpu_s} for a in found.attempts], "cpu_s": found.cpu_s}
-    written = write_run(out, best.case, args.solver, best.result, best.wall_s,
-                        extra={"validity": check, "error_estimate": best.estimate, "tolerance": tolerance})
-    warning = validity.warning_line(best.case, written["validity"])
-    if warning:
-        print(warning, file=sys.stderr)
+    _write_checked(out, best.case, args.solver, best.result, best.wall_s, best.estimate, tolerance=tolerance)
     if not found.met:
         print(f"smfem: {case.name}: --tol {100 * target:g} % not met within --max-cpu {args.max_cpu:g} s: best "
               f"estimate {100 * best.error:.3g} % ({_settings(best.case)}), kept in {out}", file=sys.stderr)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from types import SimpleNamespace
 
+import numpy as np
 import pandas as pd
 
 from cases import get_case
@@ -90,31 +91,36 @@ def asked(study, plan: dict, runs: dict) -> list[Job]:
     return missing
 
 
-def rows(case, truth, estimates: dict) -> list[dict]:
-    """One row per setting and displacement or velocity probe: the estimate and its parts, the
-    actual error against the truth, the effectivity (where the truth is fine enough to tell:
-    the actual error above :data:`~reports.metrics.TRUTH_MARGIN` times its uncertainty)."""
+def judged(case, truth, t, history, est: dict) -> list[dict]:
+    """One row per displacement or velocity probe of a run (times ``t``, ``history`` by probe)
+    and its ``error_estimate``: the estimate and its parts, the actual error against the truth,
+    and the effectivity where the truth is fine enough to tell (the actual error above
+    :data:`~reports.metrics.TRUTH_MARGIN` times its uncertainty)."""
     fields = {p.name: p.field for p in case.probes}
     window = case.references.get("comparison_window_s", 0.0)
     out = []
-    for (solver, label), (run, est) in estimates.items():
-        t = run.history["t"].to_numpy()
-        for probe, parts in est.get("probes", {}).items():
-            if fields.get(probe) not in ("u", "v"):
-                continue
-            actual = math.nan
-            if truth is not None and probe in truth.values and truth.converged(probe):
-                actual = history_errors(t, run.history[probe].to_numpy(), truth.t, truth.values[probe], window)[0]
-            judged = actual > TRUTH_MARGIN * truth.uncertainty[probe] if math.isfinite(actual) else False
-            out.append({"case": case.name, "solver": solver, "setting": label, "level": run.label, "probe": probe,
-                        "estimate": parts["total"], "actual": actual,
-                        "effectivity": parts["total"] / actual if judged and actual > 0 else math.nan,
-                        **{f"estimate_{k}": parts[k] for k in PARTS if k in parts},
-                        **{f"order_{k}": v for k, v in parts["orders"].items()},
-                        "measured_upward": " ".join(est.get("measured_upward", ())),
-                        "claim": est.get("claim", ""), "run_cpu_s": est["run_cpu_s"],
-                        "companions_cpu_s": est["companions_cpu_total_s"]})
+    for probe, parts in est.get("probes", {}).items():
+        if fields.get(probe) not in ("u", "v"):
+            continue
+        actual = math.nan
+        if truth is not None and probe in truth.values and truth.converged(probe):
+            actual = history_errors(t, np.asarray(history[probe]), truth.t, truth.values[probe], window)[0]
+        fine = math.isfinite(actual) and actual > TRUTH_MARGIN * truth.uncertainty[probe]
+        out.append({"probe": probe, "estimate": parts["total"], "actual": actual,
+                    "effectivity": parts["total"] / actual if fine and actual > 0 else math.nan,
+                    **{f"estimate_{k}": parts[k] for k in PARTS if k in parts},
+                    **{f"order_{k}": v for k, v in parts["orders"].items()},
+                    "measured_upward": " ".join(est.get("measured_upward", ())),
+                    "claim": est.get("claim", ""), "run_cpu_s": est["run_cpu_s"],
+                    "companions_cpu_s": est["companions_cpu_total_s"]})
     return out
+
+
+def rows(case, truth, estimates: dict) -> list[dict]:
+    """:func:`judged` for every estimated (solver, setting) of a study's case."""
+    return [{"case": case.name, "solver": solver, "setting": label, "level": run.label, **row}
+            for (solver, label), (run, est) in estimates.items()
+            for row in judged(case, truth, run.history["t"].to_numpy(), run.history, est)]
 
 
 def summary(table: pd.DataFrame) -> str:

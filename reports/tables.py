@@ -7,6 +7,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from runs.estimate import headline
+
 from . import metrics
 from .analysis import FAMILIES, HEADLINE_MEASURE, CaseAnalysis
 from .calibration import FLOOR, SHARPNESS
@@ -45,12 +47,7 @@ def runs_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
 def _estimated_errors(an: CaseAnalysis) -> dict:
     """Per estimated run's directory: its estimated error in the headline measure (the largest
     over its displacement and velocity probes)."""
-    out = {}
-    for run, est in an.runs.estimates.values():
-        totals = [v["total"] for k, v in est.get("probes", {}).items() if k in an.headline_probes]
-        if totals:
-            out[run.path] = max(totals)
-    return out
+    return {run.path: top[1] for run, est in an.runs.estimates.values() if (top := headline(an.case, est))}
 
 
 def effectivity_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
