@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from pathlib import Path
 
-from cases import get_case, parse_sets
+from cases import get_case, parse_sets, rebuild
 from runs import validity
 from runs.estimate import ESTIMATED, estimate, summary_line
 from runs.files import write_run
 from runs.progress import Progress
-from runs.registry import CALCULIX, EXPLICIT, REFERENCE, SMFEM, solve
+from runs.registry import CALCULIX, EXPLICIT, REF2D, REF3D, REFERENCE, SMFEM, solve
 from runs.tolerance import search
 
 from .usage import EXIT_NOT_CONVERGED, UsageError, add_sets, check_writable
@@ -110,11 +111,9 @@ def parse_target(text: str) -> float:
     return value
 
 
-def _truth_floor(case) -> float | None:
-    """Three times the stored truth's uncertainty over a built-in scene's displacement and
-    velocity probes (what no run can be shown to beat); None for a scene from a file, or with
-    physics (load, material, window) other than the stored truth's."""
-    from reports.metrics import TRUTH_MARGIN
+def _stored_truth(case):
+    """A built-in scene's stored truth, while ``case`` has its physics (load, material, window:
+    every parameter but the discretization's); None otherwise, and for a scene from a file."""
     from reports.stored import directory, read
 
     path = directory(case.name)
@@ -122,42 +121,99 @@ def _truth_floor(case) -> float | None:
         return None
     truth = read(path)
     physics = lambda params: {k: v for k, v in params.items() if k not in DISCRETIZATION}
-    if truth.params and physics(truth.params) != physics(case.params):
+    return None if truth.params and physics(truth.params) != physics(case.params) else truth
+
+
+def _truth_floor(case) -> float | None:
+    """Three times the stored truth's uncertainty over a built-in scene's displacement and
+    velocity probes (what no run can be shown to beat); None without a stored truth of the
+    case's physics."""
+    from reports.metrics import TRUTH_MARGIN
+
+    truth = _stored_truth(case)
+    if truth is None:
         return None
-    probes = [p.name for p in case.probes if p.field in ("u", "v")]
-    u = truth.uncertainty_of(probes)
+    u = truth.uncertainty_of([p.name for p in case.probes if p.field in ("u", "v")])
     return TRUTH_MARGIN * u if u == u else None
 
 
+def _front_start(case, solver: str, target: float):
+    """Where ``--tol`` starts on a built-in scene whose front is stored (``truths/CASE/front.csv``,
+    measured against the same truth): the cheapest measured settings within ``target``, else the
+    most accurate; (overrides, their measured error) or None."""
+    from reports.stored import read_front
+
+    front = read_front(case.name) if _stored_truth(case) is not None else None
+    if front is None:
+        return None
+    name = solver if solver != REFERENCE else {2: REF2D, 3: REF3D}.get(case.params.get("dim", 2))
+    rows = front[(front.solver == name) & front.total.notna()]
+    if not len(rows):
+        return None
+    within = rows[rows.total <= target]
+    row = within.sort_values("cpu_s").iloc[0] if len(within) else rows.sort_values("total").iloc[0]
+    over = {"refine": int(row.refine), "harmonics": int(row.harmonics), "dt": float(row["dt"])}
+    if row.coarsen == row.coarsen and row.coarsen:  # NaN: not coarsened
+        over["coarsen"] = int(row.coarsen)
+    elif "coarsen" in case.params:
+        over["coarsen"] = 1
+    return over, float(row.total)
+
+
 def _settings(case) -> str:
-    return f"refine {case.refine}, harmonics {case.harmonics}, dt {case.dt:.3g}"
+    coarsen = case.params.get("coarsen", 1)
+    return f"refine {case.refine}" + (f", coarsen {coarsen}" if coarsen > 1 else "") + \
+        f", harmonics {case.harmonics}, dt {case.dt:.3g}"
+
+
+def _estimated(attempt) -> str:
+    return "no estimate" if math.isinf(attempt.error) else f"estimated {100 * attempt.error:.3g} %"
+
+
+def _achieved(attempt) -> str:
+    if attempt.measured is None:
+        return _estimated(attempt)
+    return f"measured {100 * attempt.measured:.3g} % against the truth ({_estimated(attempt)})"
 
 
 def _to_tolerance(case, args, out: Path) -> int:
     """``--tol``: the search of :mod:`runs.tolerance`, one line per run, the best run written."""
     target = parse_target(args.tol)
-    if args.estimate == "off" or args.solver not in ESTIMATED:
-        raise UsageError(f"--tol needs the error estimate (smfem or reference, --estimate on), not {args.solver}")
+    if args.solver not in ESTIMATED:
+        raise UsageError(f"--tol needs the error estimate (smfem or reference), not {args.solver}")
     floor = _truth_floor(case)
     if floor is not None and target < floor:
         raise UsageError(f"--tol {args.tol}: below three times {case.name}'s stored truth uncertainty "
                          f"({100 * floor:.2g} %): no run can be shown to reach it")
-    found = search(case, args.solver, target, args.max_cpu, fields=not args.no_fields)
+    start = _front_start(case, args.solver, target)
+    if args.estimate == "off" and (start is None or start[1] > target):
+        raise UsageError(f"--tol {args.tol} --estimate off: only where a built-in scene's measured front reaches the "
+                         "target (its error against the truth stands for the run's); elsewhere --tol needs the estimate")
+    measured = None
+    if start is not None:
+        case, measured = rebuild(case, start[0]), start[1]
+        print(f"--tol {100 * target:g} %: {case.name}'s measured front (truths/{case.name}/front.csv) starts at "
+              f"{_settings(case)}, {100 * measured:.3g} % against the stored truth")
+    found = search(case, args.solver, target, args.max_cpu, fields=not args.no_fields, measured=measured,
+                   estimated=args.estimate == "on")
     for k, a in enumerate(found.attempts, start=1):
-        print(f"--tol {100 * target:g} %: run {k} ({_settings(a.case)}): estimated {100 * a.error:.3g} %, "
-              f"{a.cpu_s:.3g} s CPU with its companions")
+        known = f"measured {100 * a.measured:.3g} % against the truth, " if a.measured is not None else ""
+        print(f"--tol {100 * target:g} %: run {k} ({_settings(a.case)}): {known}{_estimated(a)}, "
+              f"{a.cpu_s:.3g} s CPU" + ("" if math.isinf(a.error) else " with its companions"))
     if not found.attempts:
         print(f"smfem: {case.name}: --tol: the first run did not finish", file=sys.stderr)
         return EXIT_NOT_CONVERGED
     best = found.best
     tolerance = {"target": target, "met": found.met, "runs": [
-        {"settings": {"refine": a.case.refine, "harmonics": a.case.harmonics, "dt": a.case.dt},
-         "estimate": a.error, "cpu_s": a.cpu_s} for a in found.attempts], "cpu_s": found.cpu_s}
-    _write_checked(out, best.case, args.solver, best.result, best.wall_s, best.estimate, tolerance=tolerance)
+        {"settings": {"refine": a.case.refine, "coarsen": a.case.params.get("coarsen", 1), "harmonics": a.case.harmonics,
+                      "dt": a.case.dt}, "estimate": None if math.isinf(a.error) else a.error, "measured_against_truth": a.measured, "valid": a.valid,
+         "cpu_s": a.cpu_s} for a in found.attempts], "cpu_s": found.cpu_s}
+    _write_checked(out, best.case, args.solver, best.result, best.wall_s, best.estimate if args.estimate == "on" else None, tolerance=tolerance)
+    outside = "" if best.valid else " (outside the small-strain model: no accuracy of the physical body is claimed)"
     if not found.met:
         print(f"smfem: {case.name}: --tol {100 * target:g} % not met within --max-cpu {args.max_cpu:g} s: best "
-              f"estimate {100 * best.error:.3g} % ({_settings(best.case)}), kept in {out}", file=sys.stderr)
+              f"{_achieved(best)} ({_settings(best.case)}){outside}, kept in {out}", file=sys.stderr)
         return EXIT_NOT_CONVERGED
-    print(f"{case.name} ({args.solver}): --tol {100 * target:g} % met: estimated {100 * best.error:.3g} % at "
-          f"{_settings(best.case)}, {found.cpu_s:.3g} s CPU in {len(found.attempts)} runs -> {out}")
+    print(f"{case.name} ({args.solver}): --tol {100 * target:g} % met: {_achieved(best)} at "
+          f"{_settings(best.case)}, {found.cpu_s:.3g} s CPU in {len(found.attempts)} runs{outside} -> {out}")
     return 0

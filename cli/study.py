@@ -17,6 +17,9 @@ def add(sub) -> None:
     study.set_defaults(handler=command)
     report = sub.add_parser("report", help="the verification report: index.html, report.pdf, tables/*.csv")
     add_study_options(report, "out/report")
+    report.add_argument("--store-fronts", action="store_true",
+                        help="keep each scene's measured work-precision points (tables/fronts.csv) with its stored "
+                             "truth, as truths/CASE/front.csv: where smfem run --tol starts")
     report.set_defaults(handler=command)
 
 
@@ -42,6 +45,11 @@ def command(args) -> int:
     made = "index.html, report.pdf, " if args.command == "report" else ""
     print(f"{args.command}: {len(report.study.executed)} runs executed, {report.study.cached} cached, "
           f"{report.wall_time_s:.1f} s -> {out}/ ({made}tables/, figures/)")
+    if getattr(args, "store_fronts", False):
+        from reports.stored import write_fronts
+
+        written = write_fronts(report.tables["fronts"])
+        print(f"{args.command}: fronts kept for {', '.join(written) or 'no scene (none measured against its stored truth)'}")
     failed = [r for an in report.analyses for r in an.runs.all_runs() if r.status == FAILED]
     for run in failed:
         print(f"smfem: {run.job.describe()}: failed: {run.message}", file=sys.stderr)

@@ -27,9 +27,10 @@ from .plan import MODAL, SMFEM
 
 #: packages whose source decides a solver's results
 SOURCES = {SMFEM: ("smfem", "cases", "runs"), "reference": ("reference_fem", "cases", "runs")}
-#: modules of those packages that draw or report and decide nothing in a run's files: editing a
-#: figure must not send a report back to rerunning every solve
-PRESENTATION = {"runs/figures.py", "runs/progress.py"}
+#: modules of those packages that decide nothing in a run's files (they draw, report, or read
+#: finished runs: the error estimate and the --tol search): editing them must not send a report
+#: back to rerunning every solve
+PRESENTATION = {"runs/figures.py", "runs/progress.py", "runs/estimate.py", "runs/tolerance.py"}
 
 
 @functools.cache

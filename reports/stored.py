@@ -89,3 +89,38 @@ def find(name: str, case, plan, root: Path | None = None) -> tuple[Truth | None,
         return None, (f"the stored truth in {path} was made for another case definition or truth method "
                       "(its key does not match)")
     return read(path), ""
+
+
+#: a scene's measured work-precision points, kept beside its stored truth
+FRONT = "front.csv"
+
+
+def stored_key(name: str, root: Path | None = None) -> str:
+    """The key of scene ``name``'s stored truth ('' when there is none)."""
+    path = directory(name, root) / "summary.json"
+    return json.loads(path.read_text()).get("key", "") if path.exists() else ""
+
+
+def write_fronts(fronts: pd.DataFrame, root: Path | None = None) -> list[str]:
+    """Keep each scene's rows of a report's ``fronts.csv`` (:func:`reports.tables.fronts_table`)
+    that were measured against its stored truth, as ``truths/CASE/front.csv``; returns the
+    scenes written."""
+    written = []
+    for name, rows in fronts.groupby("case", sort=False) if len(fronts) else ():
+        key = stored_key(name, root)
+        rows = rows[rows.truth_key == key] if key else rows.iloc[:0]
+        if len(rows):
+            rows.to_csv(directory(name, root) / FRONT, index=False, float_format="%.6g")
+            written.append(name)
+    return written
+
+
+def read_front(name: str, root: Path | None = None) -> pd.DataFrame | None:
+    """Scene ``name``'s stored work-precision points while the truth they were measured against
+    is still the stored one; None otherwise."""
+    path = directory(name, root) / FRONT
+    if not path.exists():
+        return None
+    front = pd.read_csv(path)
+    key = stored_key(name, root)
+    return front if key and len(front) and (front.truth_key == key).all() else None

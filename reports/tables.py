@@ -56,6 +56,28 @@ def effectivity_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
 
+#: the run parameters that place a run on a work-precision front
+SETTINGS = ("refine", "coarsen", "harmonics", "dt", "dim")
+
+
+def fronts_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
+    """Every run with a total error: its settings, CPU, headline error against the truth, whether
+    it is on its solver's front, and the key of the truth it was measured against (what
+    ``smfem run --tol`` starts from, :func:`reports.stored.write_fronts`)."""
+    rows = []
+    for an in analyses:
+        key = an.truth.key if an.truth is not None else ""
+        for solver, s in an.solvers.items():
+            if s.status != OK or not len(s.points):
+                continue
+            params = {r.label: r.summary["params"] for r in an.runs.series[solver] if r.status == OK}
+            for p in s.points.itertuples():
+                rows.append({"case": an.case.name, "solver": solver, "level": p.label,
+                             **{k: params[p.label].get(k) for k in SETTINGS}, "n_dof": p.n_dof, "cpu_s": p.cpu,
+                             "total": p.total, "on_front": p.label in s.front, "truth_key": key})
+    return pd.DataFrame(rows)
+
+
 def inside_model(validity: dict | None) -> str:
     """``yes``, or what leaves the small-strain model (runs.validity), for the runs table."""
     if not validity:
@@ -174,6 +196,7 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "orders": pd.concat([an.orders for an in analyses], ignore_index=True),
         "published": pd.concat([an.published for an in analyses], ignore_index=True),
         "effectivity": effectivity_table(analyses),
+        "fronts": fronts_table(analyses),
     }
     for name, table in tables.items():
         table.to_csv(out / f"{name}.csv", index=False, float_format="%.6g")
@@ -199,5 +222,8 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "effectivity.csv: per solver, setting (defaults, refine 2, dt/2) and displacement or velocity probe, the\n"
         "  run's error estimate and its parts, its actual error against the truth and effectivity = estimate /\n"
         f"  actual (where the actual error exceeds {metrics.TRUTH_MARGIN:g} truth uncertainties); honest within "
-        f"[{BAND[0]:g}, {BAND[1]:g}]\n")
+        f"[{BAND[0]:g}, {BAND[1]:g}]\n"
+        "fronts.csv: per run with a total error, its settings (refine, coarsen, harmonics, dt, dim), CPU, total\n"
+        "  error (headline measure), on_front and the key of the truth it was measured against; smfem report\n"
+        "  --store-fronts keeps it with the stored truths (truths/CASE/front.csv), where smfem run --tol starts\n")
     return tables

@@ -1,13 +1,17 @@
 """``smfem run CASE --tol 1%``: the cheapest settings expected to reach an accuracy.
 
-Start at the case's settings, estimate the run's error (:mod:`runs.estimate`), and while the
+Start at the case's settings (for a built-in scene, the caller chooses them from its measured
+front: the cheapest run whose error against the truth met the target, whose ``measured``
+error then stands for the run's), estimate the run's error (:mod:`runs.estimate`), and while the
 estimate is above the target refine the parts that hold it up: each part above its share of
 the target (the target over the number of parts) is refined by the power of two its order
 says brings it within the share (refine x 2^k, harmonics x 2^k, dt / 2^k; at most x 4 at a
 time, so a pre-asymptotic estimate cannot send the next run far off). Every run and its
 estimate are kept; the search stops at the first run whose estimate meets the target, or when
 the CPU spent would pass ``max_cpu`` (the best run is then the answer, and the caller says
-the target was not met).
+the target was not met). A run outside the small-strain model (:mod:`runs.validity`) is
+kept as any other, marked: its estimate measures the discretization of a model that does not
+hold, and the caller claims no accuracy for it.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ from dataclasses import dataclass, field
 
 from cases import rebuild
 
+from . import validity
 from .estimate import PARTS, estimate, headline
 from .registry import solve
 
@@ -33,6 +38,14 @@ class Attempt:
     error: float  # the largest estimated total over the displacement and velocity probes
     cpu_s: float  # the run's and its companions'
     wall_s: float
+    #: the error measured against the truth at these settings (a built-in scene's front), or None
+    measured: float | None = None
+    valid: bool = True
+
+    @property
+    def achieved(self) -> float:
+        """The error the run is known to have: measured against the truth where it was, else estimated."""
+        return self.error if self.measured is None else self.measured
 
 
 @dataclass
@@ -42,11 +55,11 @@ class Search:
 
     @property
     def best(self) -> Attempt:
-        return min(self.attempts, key=lambda a: a.error)
+        return min(self.attempts, key=lambda a: a.achieved)
 
     @property
     def met(self) -> bool:
-        return bool(self.attempts) and self.best.error <= self.target
+        return bool(self.attempts) and self.best.achieved <= self.target
 
     @property
     def cpu_s(self) -> float:
@@ -67,7 +80,7 @@ def next_settings(case, est: dict, target: float) -> dict:
         factor = min(MAX_FACTOR, 2 ** math.ceil(math.log2((value / share) ** (1 / row["orders"][part]))))
         factor = max(factor, 2)
         if part == "space":
-            over["refine"] = case.refine * factor
+            over.update(finer_mesh(case, factor))
         elif part == "harmonics":
             over["harmonics"] = case.harmonics * factor
         else:
@@ -75,10 +88,32 @@ def next_settings(case, est: dict, target: float) -> dict:
     return over
 
 
+def finer_mesh(case, factor: int) -> dict:
+    """Overrides of a mesh ``factor`` times finer: a coarsened mesh's ``coarsen`` divided first."""
+    coarsen = case.params.get("coarsen", 1)
+    if coarsen == 1:
+        return {"refine": case.refine * factor}
+    if coarsen >= factor:
+        return {"coarsen": coarsen // factor}
+    return {"coarsen": 1, "refine": case.refine * factor // coarsen}
+
+
+def growth(case, over: dict) -> float:
+    """How many times dearer a run with the overrides ``over`` is than ``case``'s: unknowns grow
+    with the mesh to the power of the section's dimensions (three in a 3-D model), and with the
+    harmonics; steps with 1 / dt."""
+    dims = 3 if case.params.get("dim") == 3 else 2
+    mesh = over.get("refine", case.refine) / case.refine * case.params.get("coarsen", 1) / over.get(
+        "coarsen", case.params.get("coarsen", 1))
+    return mesh ** dims * over.get("harmonics", case.harmonics) / case.harmonics * case.dt / over.get("dt", case.dt)
+
+
 def search(case, solver: str, target: float, max_cpu: float, progress=None, max_runs: int = 8,
-           fields: bool = False) -> Search:
-    """Runs from ``case``'s settings up, until one's estimate meets ``target`` (a fraction) or
-    the CPU (runs and companions) would pass ``max_cpu`` s."""
+           fields: bool = False, measured: float | None = None, estimated: bool = True) -> Search:
+    """Runs from ``case``'s settings up, until one's estimate (or, for the first, the error
+    ``measured`` against the truth at its settings) meets ``target`` (a fraction), the CPU (runs
+    and companions) would pass ``max_cpu`` s. Without ``estimated`` (no companions) only the
+    first run's ``measured`` error can meet the target."""
     found = Search(target)
     current = case
     while len(found.attempts) < max_runs:
@@ -86,20 +121,20 @@ def search(case, solver: str, target: float, max_cpu: float, progress=None, max_
         result = solve(solver, current, progress=progress, fields=fields)
         if not result.converged:
             break
-        est = estimate(current, solver, result)
+        est = estimate(current, solver, result) if estimated else {"method": "none: --estimate off"}
         top = headline(current, est) if "probes" in est else None
         error = top[1] if top else math.inf
-        found.attempts.append(Attempt(current, result, est, error, float(result.cpu_time_s) +
-                                      float(est.get("companions_cpu_total_s", 0.0)), time.perf_counter() - wall0))
-        if error <= target or top is None:
+        attempt = Attempt(current, result, est, error, float(result.cpu_time_s) +
+                          float(est.get("companions_cpu_total_s", 0.0)), time.perf_counter() - wall0,
+                          measured if not found.attempts else None, validity.check(current, result)["valid"])
+        found.attempts.append(attempt)
+        if attempt.achieved <= target or top is None:
             break
         over = next_settings(current, est, target)
         if not over:
             break
         # the next run costs at least the last one times its refinement: stop before passing the budget
-        growth = (over.get("refine", current.refine) / current.refine) ** 2 \
-            * over.get("harmonics", current.harmonics) / current.harmonics * current.dt / over.get("dt", current.dt)
-        if found.cpu_s + found.attempts[-1].cpu_s * growth > max_cpu:
+        if found.cpu_s + attempt.cpu_s * growth(current, over) > max_cpu:
             break
         current = rebuild(current, over)
     return found

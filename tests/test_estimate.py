@@ -8,6 +8,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from cases import get_case
@@ -163,3 +164,85 @@ def test_the_difference_of_histories_too_small_to_square_is_still_measured():
         warnings.simplefilter("error")
         e_max, e_l2 = history_errors(t, 1.1e-200 * np.sin(t), t, 1e-200 * np.sin(t))
     assert e_max == pytest.approx(0.1) and math.isnan(e_l2)
+
+
+def test_tol_starts_from_the_stored_front_and_its_measured_error_holds(tmp_path, capsys):
+    """On a built-in scene the first run is the stored front's cheapest setting within the
+    target, and the error the front measured there is the run's: recomputed against the stored
+    truth, it is the same."""
+    from reports.metrics import history_errors
+    from reports.stored import directory, read, read_front
+
+    front = read_front("thick_cylinder")
+    within = front[(front.solver == SMFEM) & (front.total <= 0.05)].sort_values("cpu_s").iloc[0]
+    out = tmp_path / "tol"
+    assert main(["run", "thick_cylinder", "--tol", "5%", "--out", str(out), "--quiet", "--no-fields"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert "measured front" in lines[0] and "--tol 5 % met: measured" in lines[-1]
+    summary = json.loads((out / "summary.json").read_text())
+    tol = summary["tolerance"]
+    assert tol["met"] and len(tol["runs"]) == 1
+    run = tol["runs"][0]
+    assert run["settings"]["dt"] == pytest.approx(within["dt"]) and run["settings"]["harmonics"] == within.harmonics
+    assert run["measured_against_truth"] == pytest.approx(within.total)
+    case, truth = get_case("thick_cylinder"), read(directory("thick_cylinder"))
+    history = pd.read_csv(out / "history.csv")
+    window = case.references.get("comparison_window_s", 0.0)
+    actual = max(history_errors(history.t.to_numpy(), history[p.name].to_numpy(), truth.t, truth.values[p.name],
+                                window)[0] for p in case.probes if p.field in ("u", "v"))
+    assert actual == pytest.approx(within.total, rel=1e-3) and actual <= 0.05
+
+
+def test_tol_without_the_estimate_is_the_fronts_cheapest_run_alone(tmp_path, capsys):
+    """``--estimate off``: the stored front's setting within the target, run alone (no
+    companions), its measured error standing for the run's; where no front reaches the target
+    (here: another load), a user mistake."""
+    out = tmp_path / "tol"
+    assert main(["run", "thick_cylinder", "--tol", "5%", "--estimate", "off", "--out", str(out), "--quiet",
+                 "--no-fields"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert "error_estimate" not in summary and summary["tolerance"]["met"]
+    run = summary["tolerance"]["runs"][0]
+    assert run["estimate"] is None and run["measured_against_truth"] <= 0.05 and run["cpu_s"] == summary["cpu_time_s"]
+    assert main(["run", "thick_cylinder", "--set", "q=1e7", "--tol", "5%", "--estimate", "off",
+                 "--out", str(tmp_path / "other"), "--quiet"]) == 2
+    assert "only where a built-in scene's measured front reaches the target" in capsys.readouterr().err
+
+
+def test_tol_claims_no_accuracy_for_a_run_outside_the_model(tmp_path, capsys):
+    out = tmp_path / "tol"
+    assert main(["run", "thick_cylinder", "--set", "plastic=true", "--set", "q=5e8", "--tol", "50%",
+                 "--out", str(out), "--quiet", "--no-fields"]) == 0
+    captured = capsys.readouterr()
+    assert "outside the small-strain model: no accuracy" in captured.out.splitlines()[-1]
+    assert "outside the small-strain model" in captured.err
+    summary = json.loads((out / "summary.json").read_text())
+    assert not summary["tolerance"]["runs"][-1]["valid"] and summary["error_estimate"]["claim"].startswith("none")
+
+
+def test_fronts_are_kept_only_against_the_stored_truth_they_were_measured_with(tmp_path):
+    from reports.stored import FRONT, read_front, write_fronts
+
+    (tmp_path / "dome").mkdir()
+    (tmp_path / "dome" / "summary.json").write_text(json.dumps({"key": "abc"}))
+    fronts = pd.DataFrame({"case": ["dome", "dome", "rod_impact"], "solver": [SMFEM, REF2D, SMFEM],
+                           "refine": [1, 1, 1], "dt": [1e-6] * 3, "cpu_s": [0.1, 0.2, 0.3],
+                           "total": [0.05, 0.02, 0.1], "truth_key": ["abc", "abc", "abc"]})
+    assert write_fronts(fronts, tmp_path) == ["dome"]  # no stored truth for the rod here
+    assert len(read_front("dome", tmp_path)) == 2 and not (tmp_path / "rod_impact" / FRONT).exists()
+    (tmp_path / "dome" / "summary.json").write_text(json.dumps({"key": "a new truth"}))
+    assert read_front("dome", tmp_path) is None
+    assert write_fronts(fronts, tmp_path) == []
+
+
+def test_a_finer_mesh_takes_off_the_coarsening_first():
+    from cases import rebuild
+    from runs.tolerance import finer_mesh, growth
+
+    case = get_case("notched_strip", {"coarsen": 4})
+    assert finer_mesh(case, 2) == {"coarsen": 2} and finer_mesh(case, 4) == {"coarsen": 1}
+    assert finer_mesh(rebuild(case, {"coarsen": 2}), 4) == {"coarsen": 1, "refine": 2}
+    assert finer_mesh(get_case("dome"), 2) == {"refine": 2}
+    assert growth(case, {"coarsen": 2, "dt": case.dt / 2}) == pytest.approx(8)
+    three_d = get_case("rod_impact", {"dim": 3})
+    assert growth(three_d, {"refine": 2}) == pytest.approx(8)

@@ -58,8 +58,11 @@ def test_tiny_report_has_a_figure_per_case_the_headline_and_the_tables(tiny):
         assert (series / "fields.pvd").exists() and len(list(series.glob("fields_*.vtu"))) >= 2
         assert f"fields/{study.case}-smfem-series/fields.pvd" in (out / "index.html").read_text()
         assert (out / "figures" / f"{study.case}-spatial.png").exists()
-    for name in ("headline", "truth", "spatial", "runs", "errors", "orders", "published"):
+    for name in ("headline", "truth", "spatial", "runs", "errors", "orders", "published", "fronts"):
         assert (out / "tables" / f"{name}.csv").exists()
+    fronts = pd.read_csv(out / "tables" / "fronts.csv")  # what --store-fronts keeps for --tol
+    dome = fronts[(fronts.case == "dome") & (fronts.solver == SMFEM)]
+    assert len(dome) == 9 and dome.on_front.any() and (dome.total > 0).all() and set(dome.refine) == {1, 2, 3}
     head = pd.read_csv(out / "tables" / "headline.csv")
     # dome: smfem, 2D, 3D and (where ccx is installed) calculix; thick cylinder: smfem, 2D
     assert len(head) == (6 if shutil.which("ccx") else 5) and set(head.case) == {"dome", "thick_cylinder"}
@@ -141,12 +144,12 @@ def test_every_case_of_the_quick_report_has_a_truth():
     for study in quick():
         # three time steps per solver (two for the 3D reference on the notched scenes, where its
         # mesh limits it); CalculiX is one point at the case's settings (its runs cost 100 times
-        # the reference's on the same mesh), left to the full report on the notched cylinder
+        # the reference's on the same mesh), left to the full report on the notched scenes
         dts = {s.solver: {level.get("dt") for level in s.levels} for s in study.series if s.solver != CALCULIX}
         notched = study.case.startswith("notched")
         assert all(len(d) >= (2 if notched and solver == REF3D else 3) for solver, d in dts.items()), (study.case, dts)
         calculix = [s.levels for s in study.series if s.solver == CALCULIX]
-        assert calculix == ([] if study.case == "notched_cylinder" else [({},)])
+        assert calculix == ([] if notched else [({},)])
 
 
 def test_dome_orders_and_published_extrema_are_tabulated(tiny):

@@ -410,6 +410,18 @@ def test_stored_truth_key_matches_its_case(name):
 
 
 @pytest.mark.parametrize("name", SCENES)
+def test_stored_front_was_measured_against_the_stored_truth(name):
+    """``smfem run --tol`` starts from a scene's stored front only while it was measured against
+    the stored truth: when the truth is made again, this fails until ``smfem report
+    --store-fronts`` is run again."""
+    from reports.stored import read_front
+
+    front = read_front(name)
+    assert front is not None, f"truths/{name}/front.csv is missing or stale: run 'smfem report --store-fronts'"
+    assert {"smfem", "reference-2d"} <= set(front.solver) and (front.total > 0).all() and (front.cpu_s > 0).all()
+
+
+@pytest.mark.parametrize("name", SCENES)
 def test_stored_truth_is_sharp_enough_to_judge_its_scene(name):
     """0.3 % on every displacement and velocity probe, 1 % on the rod's stresses through its
     window; probes on singular points say why they have no truth."""
