@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .geometry import PRISM, RING, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
+from .geometry import PRISM, RING, BodyForce, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
 from .material import Material
 
 
@@ -42,6 +42,10 @@ class Case:
     contrast: float = 1.0
     initial_velocity: tuple[InitialVelocity, ...] = ()
     wall: Wall | None = None
+    body_forces: tuple[BodyForce, ...] = ()
+    #: the material varying smoothly along x3: E and rho times ``1 + sum a cos(m k x3)`` over
+    #: the terms ``(a, m)`` (k = 1 on a ring, pi / length on a prism), :meth:`variation_factor`
+    variation: tuple[tuple[float, int], ...] = ()
     symmetric: bool = True
     axisymmetric: bool = False
     units: str = "SI (m, N, s, Pa, kg/m^3)"
@@ -52,6 +56,14 @@ class Case:
     def __post_init__(self):
         if self.body not in (RING, PRISM):
             raise ValueError(f"body must be {RING!r} or {PRISM!r}")
+
+    def variation_factor(self, x3):
+        """``1 + sum a cos(m k x3)`` at ``x3`` (1 without a variation)."""
+        import numpy as np
+
+        k = 1.0 if self.body == RING else math.pi / self.length
+        x3 = np.asarray(x3, float)
+        return 1.0 + sum(a * np.cos(m * k * x3) for a, m in self.variation) + 0.0 * x3
 
     @property
     def dt(self) -> float:

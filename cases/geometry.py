@@ -127,6 +127,17 @@ class Pressure:
 
 
 @dataclass(frozen=True)
+class BodyForce:
+    """A body force per unit volume ``pattern(x1, x2, x3) * time(t)``: ``pattern`` holds the
+    three components (in the body's coordinates, :mod:`cases.manufactured` expressions of
+    ``x1, x2, x3``), ``time`` an expression of ``t``. A case sums its terms: a manufactured
+    motion ``U(x) T(t)`` needs two, ``rho U`` times ``T''`` and ``-div sigma(U)`` times ``T``."""
+
+    pattern: tuple[str, str, str]
+    time: str = "1"
+
+
+@dataclass(frozen=True)
 class Support:
     """Zero displacement of ``components`` (1-based) on ``edge``, or on every node if ``edge='all'``."""
 

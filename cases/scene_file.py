@@ -19,9 +19,11 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from . import dome, notched_cylinder, notched_strip, rod_impact, thick_cylinder
 from .case import Case
-from .geometry import EDGES, PRISM, RING, Axis, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
+from .geometry import EDGES, PRISM, RING, Axis, BodyForce, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
 from .material import Material
 from .params import COMMON, MAX_STRESS, ParameterError, Spec, validate
 
@@ -44,7 +46,7 @@ BOUND = {"contrast": "cutout", "layer_thickness": "wall", "layer_stiffness": "wa
 FEATURES = {"cutout": "[[cutout]]", "wall": "[wall]"}
 
 TOP = ("name", "title", "body", "units", "length", "symmetric", "axisymmetric", "params", "material",
-       "section", "load", "support", "cutout", "initial_velocity", "wall", "probe", "references")
+       "section", "load", "body_force", "support", "cutout", "initial_velocity", "wall", "probe", "references")
 PROBE_KEYS = ("name", "kind", "field", "component", "point", "edge")
 #: probe kind -> the fields it may record
 PROBE_FIELDS = {"point": ("u", "v", "sigma", "peps"), "max": ("peps",), "edge_mean": ("sigma",),
@@ -223,12 +225,14 @@ class _Scene:
         else:
             self.length = TWO_PI
         self.section = self.read_section(top.table("section", ("kind", "s", "t", "edges")))
-        material = top.table("material", ("E_T",), default={},
+        material = top.table("material", ("E_T", "variation"), default={},
                              hint=" (E, nu, rho, tau_s and plastic are parameters: give them in [params])")
         E_T = material.number("E_T", 0.0, lo=0.0)
         if E_T >= p["E"]:
             material.fail("E_T", f"{E_T!r} is out of range: the tangent modulus must be below E={p['E']:g}")
+        variation = self.read_variation(material)
         loads = tuple(self.read_load(t) for t in top.tables("load", ("q", "edge", "x3_intervals", "mode")))
+        body_forces = tuple(self.read_body_force(t) for t in top.tables("body_force", ("pattern", "time")))
         cutouts = tuple(self.read_cutout(t) for t in top.tables("cutout", ("s_range", "t_range", "x3_intervals")))
         wall = self.read_wall(top.table("wall", ("edge", "gap", "friction", "slope"))) if features["wall"] else None
         probes = tuple(self.read_probe(t) for t in top.tables("probe", PROBE_KEYS))
@@ -241,9 +245,10 @@ class _Scene:
             probes=probes, params=p, length=self.length, cutouts=tuple(c for c in cutouts if c is not None),
             contrast=p.get("contrast", 1.0),
             initial_velocity=tuple(self.read_velocity(t) for t in top.tables("initial_velocity", ("component", "value"))),
-            wall=wall, units=top.string("units", Case.__dataclass_fields__["units"].default),
+            wall=wall, body_forces=body_forces, variation=variation,
+            units=top.string("units", Case.__dataclass_fields__["units"].default),
             references=self.read_references(top, probes), source=source,
-            **self.read_symmetry(top, loads, cutouts, wall),
+            **self.read_symmetry(top, loads, cutouts, wall, body_forces, variation),
         )
         self.check_unused(params, features)
         return case
@@ -342,6 +347,39 @@ class _Scene:
         mode = t.integer("mode", 0 if self.body == RING else 1, 2000, None)
         return Pressure(q, edge, () if mode is not None else self.intervals(t, "x3_intervals"), mode)
 
+    def read_body_force(self, t: _Table) -> BodyForce:
+        """``pattern``: three expressions of x1, x2, x3 (the force per unit volume, in the body's
+        components); ``time``: an expression of t that scales it (default 1)."""
+        pattern = t.array("pattern")
+        if len(pattern) != 3 or not all(isinstance(c, str) for c in pattern):
+            t.fail("pattern", "give three expressions of x1, x2, x3 as strings, e.g. [\"0\", \"-9.81 * 7800\", \"0\"]")
+        from . import manufactured  # sympy: only for a scene that has a body force
+
+        time = t.string("time", "1")
+        for key, texts, allowed in (("pattern", pattern, {"x1", "x2", "x3"}), ("time", [time], {"t"})):
+            for text in texts:
+                try:
+                    used = {str(v) for v in manufactured.parse(text).free_symbols}
+                except (ValueError, SyntaxError, TypeError, AttributeError) as exc:  # sympy's parse errors
+                    t.fail(key, f"{text!r} is not an expression: {_one_line(str(exc))}")
+                if not used <= allowed:
+                    t.fail(key, f"{text!r} uses {', '.join(sorted(used - allowed))}: {key} may use "
+                                f"{', '.join(sorted(allowed))} only")
+        return BodyForce(tuple(pattern), time)
+
+    def read_variation(self, material: _Table) -> tuple[tuple[float, int], ...]:
+        """``variation = [[a, m], ...]``: E and rho times ``1 + sum a cos(m k x3)``."""
+        terms = []
+        for term in material.array("variation", []):
+            if not (isinstance(term, list) and len(term) == 2):
+                material.fail("variation", f"{term!r}: give [amplitude, mode] pairs, e.g. [[0.3, 2]]")
+            a = material.to_number("variation", term[0], lo=-1.0, hi=1.0)
+            material.check_integer("variation", term[1], 1, 2000)
+            terms.append((a, int(term[1])))
+        if sum(abs(a) for a, _ in terms) >= 1.0:
+            material.fail("variation", "the amplitudes' sum of magnitudes must be below 1 (E and rho stay positive)")
+        return tuple(terms)
+
     def read_support(self, t: _Table) -> Support:
         edge = self.edge(t, "edge", allow_all=True)
         components = t.array("components")
@@ -412,7 +450,7 @@ class _Scene:
         if not lo <= point[2] <= hi:
             t.fail("point", f"x3 = {point[2]:g} is outside the body: need {lo:g} <= x3 <= {hi:g}")
 
-    def read_symmetry(self, top: _Table, loads, cutouts, wall: Wall | None) -> dict:
+    def read_symmetry(self, top: _Table, loads, cutouts, wall: Wall | None, body_forces=(), variation=()) -> dict:
         """``symmetric`` and ``axisymmetric`` (ring only), each checked against the loads and
         cut-outs: a wrong claim would make a solver leave out harmonics that carry the answer."""
         if self.body == PRISM:
@@ -430,6 +468,15 @@ class _Scene:
                                          "[[0, 2 pi]], or set axisymmetric = false)")
             if symmetric and mode is None and not _same(circle, _on_circle([(-b, -a) for a, b in intervals])):
                 top.fail("symmetric", f"true, but {where} is not symmetric about x3 = 0 (set symmetric = false)")
+        for i, force in enumerate(body_forces, 1):
+            even, uniform = _body_force_symmetry(force)
+            if symmetric and not even:
+                top.fail("symmetric", f"true, but body_force[{i}] is not symmetric about x3 = 0 (u_r, u_z even, "
+                                      "u_theta odd; set symmetric = false)")
+            if axisymmetric and not uniform:
+                top.fail("axisymmetric", f"true, but body_force[{i}] varies along x3 or turns about the axis")
+        if axisymmetric and variation:
+            top.fail("axisymmetric", "true, but the material varies along x3 (variation)")
         if axisymmetric and wall is not None and wall.slope > 0:
             top.fail("axisymmetric", f"true, but the wall's slope is {wall.slope:g} > 0 (set axisymmetric = false)")
         return {"symmetric": symmetric, "axisymmetric": axisymmetric}
@@ -448,6 +495,23 @@ class _Scene:
             singular = t.table("singular_probes", tuple(p.name for p in probes))
             out["singular_probes"] = {k: singular.string(k) for k in singular.data}
         return out
+
+
+def _body_force_symmetry(force) -> tuple[bool, bool]:
+    """Whether a ring's body force is symmetric about x3 = 0 (components 1, 2 even, 3 odd) and
+    whether it is axisymmetric (no x3 dependence, no component 3), tried at sample points."""
+    from . import manufactured
+
+    rng = np.random.default_rng(0)
+    x1, x2, x3 = rng.random(16) + 0.5, rng.random(16), TWO_PI * rng.random(16)
+    f = [np.asarray(manufactured.numeric(c)(x1, x2, x3, 0.0), float) for c in force.pattern]
+    g = [np.asarray(manufactured.numeric(c)(x1, x2, -x3, 0.0), float) for c in force.pattern]
+    h = [np.asarray(manufactured.numeric(c)(x1, x2, 0 * x3, 0.0), float) for c in force.pattern]
+    scale = max(max(np.abs(v).max() for v in f), 1e-300)
+    close = lambda a, b: np.allclose(a, b, rtol=1e-9, atol=1e-12 * scale)
+    even = close(f[0], g[0]) and close(f[1], g[1]) and close(f[2], -g[2])
+    uniform = close(f[0], h[0]) and close(f[1], h[1]) and close(f[2], 0 * f[2])
+    return even, uniform
 
 
 def _merged(pieces) -> list[tuple[float, float]]:

@@ -53,20 +53,22 @@ def x3_quadrature(case, harmonics: int) -> tuple[np.ndarray, np.ndarray]:
     """Points and weights over the whole x3 range: Gauss-Legendre on each piece between cut-out
     edges, exact for the product of two harmonics < ``harmonics``."""
     period = 2 * math.pi if case.body == RING else case.length
-    return gauss_pieces(cut_edges(case, 0.0, period), 2 * harmonics * (1.0 if case.body == RING else math.pi / period))
+    top = 2 * harmonics + max((m for _, m in case.variation), default=0)  # f psi_a psi_b
+    return gauss_pieces(cut_edges(case, 0.0, period), top * (1.0 if case.body == RING else math.pi / period))
 
 
 def element_factor(case, mesh, x3: np.ndarray) -> np.ndarray:
-    """(n_elements, n_points) material factor at the x3 points: ``contrast`` in cut-outs, else 1."""
+    """(n_elements, n_points) material factor at the x3 points: ``contrast`` in cut-outs, else 1,
+    times the case's smooth variation along x3."""
     st = mesh.element_st_centres()
-    f = np.ones((mesh.n_elements, len(x3)))
+    f = np.ones((mesh.n_elements, len(x3))) * case.variation_factor(x3)[None, :]
     period = 2 * math.pi if case.body == RING else case.length
     for c in case.cutouts:
         inside = (st[:, 0] > c.s_range[0]) & (st[:, 0] < c.s_range[1]) & (st[:, 1] > c.t_range[0]) & (st[:, 1] < c.t_range[1])
         along = np.zeros(len(x3), bool)
         for a, b in c.x3_intervals:
             along |= ((x3 - a) % period < (b - a)) if case.body == RING else ((x3 > a) & (x3 < b))
-        f[np.ix_(inside, along)] = case.contrast
+        f[np.ix_(inside, along)] *= case.contrast
     return f
 
 

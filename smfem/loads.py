@@ -6,7 +6,9 @@ import numpy as np
 
 from cases.geometry import PRISM, RING, interval_fourier
 
+from .element import shape_functions
 from .fourier import Mode, psi_integrals, psi_squared_integrals
+from .fourier import psi as psi_values
 from .mesh import SectionMesh
 
 
@@ -67,4 +69,46 @@ def velocity_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode
             if norm[which]:
                 V[:, c] += iv.value * integral[which] / norm[which]
         out[mode] = V.ravel()
+    return out
+
+
+#: Gauss-Legendre points per element direction for a body force over the section (exact for
+#: the bilinear map times a smooth force to well below the element's own error)
+SECTION_POINTS = 3
+
+
+def body_force_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> list[dict[Mode, np.ndarray]]:
+    """Per body-force term of the case, the nodal load amplitude (3 n_nodes,) of every mode:
+    ``int int b(x) N_i psi(x3) dA dx3`` (a ring's area element carries r), by Gauss-Legendre
+    quadrature over each element and along x3."""
+    from cases.manufactured import numeric
+
+    if not case.body_forces:
+        return []
+    g, gw = np.polynomial.legendre.leggauss(SECTION_POINTS)
+    xi, eta = np.meshgrid(0.5 * g, 0.5 * g, indexing="ij")
+    w2 = np.outer(0.5 * gw, 0.5 * gw).ravel()
+    N, dxi, deta = shape_functions(xi.ravel(), eta.ravel())  # (ng, 4)
+    X = mesh.element_x()  # (ne, 4, 2)
+    x = np.einsum("ga,ead->egd", N, X)
+    jac = np.abs(np.einsum("ga,ea->eg", dxi, X[..., 0]) * np.einsum("ga,ea->eg", deta, X[..., 1])
+                 - np.einsum("ga,ea->eg", deta, X[..., 0]) * np.einsum("ga,ea->eg", dxi, X[..., 1]))
+    weight = jac * w2 * (x[..., 0] if case.body == RING else 1.0)  # (ne, ng)
+    # along x3: enough points for the force's and the modes' variation (checked by doubling in the tests)
+    period = 2 * np.pi if case.body == RING else case.length
+    n3 = 4 * case.harmonics + 64
+    t3, w3 = np.polynomial.legendre.leggauss(n3)
+    x3, w3 = 0.5 * period * (t3 + 1), 0.5 * period * w3
+    psi = {m: psi_values(m, x3, case.body, case.length) for m in modes}
+    out = []
+    for term in case.body_forces:
+        f = [numeric(c)(x[..., 0, None], x[..., 1, None], x3[None, None, :], 0.0) for c in term.pattern]  # (ne, ng, n3)
+        amps = {}
+        for m in modes:
+            F = np.zeros((mesh.n_nodes, 3))
+            for c in range(3):
+                along = f[c] @ (psi[m][0 if c < 2 else 1] * w3)  # (ne, ng)
+                np.add.at(F[:, c], mesh.elements, np.einsum("eg,ga->ea", along * weight, N))
+            amps[m] = F.ravel()
+        out.append(amps)
     return out

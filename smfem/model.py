@@ -35,7 +35,8 @@ class ModelError(UnsupportedCase):
 @dataclass
 class ModeSystem:
     """One mode: map ``T`` (full <- reduced), diagonal block ``K``, lumped ``M`` diagonal, load
-    ``Q`` and initial velocity ``V0`` (reduced)."""
+    ``Q`` and initial velocity ``V0`` (reduced); ``Q_terms``: the amplitude of each of the
+    case's body-force terms (reduced), which the time function of that term scales."""
 
     mode: fourier.Mode
     T: sp.csr_matrix
@@ -43,6 +44,7 @@ class ModeSystem:
     M: np.ndarray
     Q: np.ndarray
     V0: np.ndarray
+    Q_terms: tuple = ()
 
 
 class Model:
@@ -67,13 +69,15 @@ class Model:
         mat = case.material
         self.D = isotropic_D(mat.E, mat.nu)
         self.rho = mat.rho
-        self.inhomogeneous = bool(case.cutouts) and case.contrast < 1.0
+        self.inhomogeneous = (bool(case.cutouts) and case.contrast < 1.0) or bool(case.variation)
         n_harm = case.harmonics
         families = ("c", "s") if case.body == RING else ("p",)
         candidates = fourier.modes(case.body, n_harm, families)
         Q = loads.load_amplitudes(case, self.mesh, candidates)
         V = loads.velocity_amplitudes(case, self.mesh, candidates)
-        size = {m: max(np.abs(Q[m]).max(), np.abs(V[m]).max()) for m in candidates}
+        terms = loads.body_force_amplitudes(case, self.mesh, candidates)
+        size = {m: max([np.abs(Q[m]).max(), np.abs(V[m]).max()] + [np.abs(F[m]).max() for F in terms])
+                for m in candidates}
         scale = max(size.values())
         if scale == 0.0:
             raise ModelError(f"{case.name}: no load and no initial velocity: nothing moves")
@@ -117,7 +121,8 @@ class Model:
         self._maps = [constraints.mode_map(case, self.mesh, mode, fixed) for mode in self.modes]
         for i, (mode, T) in enumerate(zip(self.modes, self._maps)):
             K, M = self.reduced_blocks(i)
-            self.systems.append(ModeSystem(mode, T, K, M, T.T @ Q[mode], self._project(T, V[mode])))
+            self.systems.append(ModeSystem(mode, T, K, M, T.T @ Q[mode], self._project(T, V[mode]),
+                                           tuple(T.T @ F[mode] for F in terms)))
         self.offsets = np.cumsum([0] + [s.T.shape[1] for s in self.systems])
         self.coupled_mass = self._coupled_mass()
 

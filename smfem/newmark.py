@@ -87,23 +87,28 @@ class LinearSystem:
     M : (n,) lumped mass diagonal, or (n, n) sparse mass where harmonics couple through rho(lm)
     Q : (n,) load held from t = 0
     dt : time step, s
+    terms : ``(g, Q_k)`` pairs, loads ``g(t) Q_k`` added to ``Q`` (body forces varying in time)
     """
 
-    def __init__(self, K: sp.spmatrix, M, Q: np.ndarray, dt: float):
-        self.K, self.Q = K.tocsr(), Q
+    def __init__(self, K: sp.spmatrix, M, Q: np.ndarray, dt: float, terms=()):
+        self.K, self.Q, self.terms = K.tocsr(), Q, tuple(terms)
         self.diagonal_mass = isinstance(M, np.ndarray) and M.ndim == 1
         self.M = M if self.diagonal_mass else sp.csr_matrix(M)
         self.a0M = Constants.of(dt).a0 * self.M
         self.lu = sla.splu((self.K + (sp.diags(self.a0M) if self.diagonal_mass else self.a0M)).tocsc())
         self.factorizations = 1
 
+    def load(self, t: float) -> np.ndarray:
+        """The load at time ``t``."""
+        return self.Q + sum(float(g(t)) * Qk for g, Qk in self.terms) if self.terms else self.Q
+
     def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
-        force = self.Q - self.K @ u0
+        force = self.load(0.0) - self.K @ u0
         return force / self.M if self.diagonal_mass else sla.spsolve(self.M.tocsc(), force)
 
     def solve(self, predicted: np.ndarray, u: np.ndarray, step: int, t: float) -> tuple[np.ndarray, int]:
         """``(K + a0 M) u = Q + a0 M predicted``."""
-        return self.lu.solve(self.Q + (self.a0M * predicted if self.diagonal_mass else self.a0M @ predicted)), 1
+        return self.lu.solve(self.load(t) + (self.a0M * predicted if self.diagonal_mass else self.a0M @ predicted)), 1
 
     def commit(self, u: np.ndarray) -> None:
         """Nothing to keep: the system has no state."""

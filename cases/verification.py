@@ -1,0 +1,87 @@
+"""The manufactured scenes of code verification: a ring and a prism whose exact motion is known.
+
+Each is a square cross-section fixed on its four edges (a prism's ends hinged, as every prism
+here), driven by the body force that makes a chosen smooth motion exact
+(:mod:`cases.manufactured`): a section bubble that vanishes on the edges, times several
+harmonics along x3, times ``1 - cos(omega t)`` (at rest at t = 0, so no initial conditions are
+needed). The material may vary smoothly along x3 (``a``: E and rho times ``1 + a cos(2 k x3)``),
+which couples the harmonics. Dimensionless units: E = rho = 1, so waves run at about 1.
+
+Both solvers run these as any scene; :func:`exact` gives the probes' exact histories.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import sympy as sp
+
+from . import manufactured as mf
+from .case import Case
+from .geometry import PRISM, RING, Axis, Probe, Section, Support
+from .material import Material
+
+#: the prism's length; the ring's section spans r in [1, 2]
+LENGTH = 2.0
+OMEGA = 3.0
+NU = 0.3
+#: the variation's mode: E and rho ~ 1 + a cos(2 k x3)
+VARIATION_MODE = 2
+#: the probe point (x1, x2, x3) of each body
+POINTS = {PRISM: (0.5, 0.5, 0.7), RING: (1.5, 0.5, 0.7)}
+SPANS = {PRISM: ((0.0, 1.0), (0.0, 1.0)), RING: ((1.0, 2.0), (0.0, 1.0))}
+#: the mesh before refine: 4 x 4 elements
+PAPER_COUNTS = 4
+DEFAULTS = dict(dt=2.5e-3, t_end=1.0, refine=1, harmonics=6, a=0.3)
+
+
+def motion(body: str) -> list[sp.Expr]:
+    """``U(x1, x2, x3)``: the bubble times harmonics 1-3 (prism: sin in u1, u2, cos in u3;
+    ring: cos in u_r, u_z with the axisymmetric term, sin in u_theta)."""
+    x1, x2, x3 = mf.X1, mf.X2, mf.X3
+    (s0, s1), (t0, t1) = SPANS[body]
+    bubble = 16 * (x1 - s0) * (s1 - x1) * (x2 - t0) * (t1 - x2)
+    if body == PRISM:
+        k = sp.pi / LENGTH
+        return [bubble * (sp.sin(k * x3) + sp.sin(3 * k * x3) / 2), bubble * sp.sin(2 * k * x3),
+                bubble * (sp.cos(k * x3) / 2 + sp.cos(3 * k * x3) / 3)]
+    return [bubble * (1 + sp.cos(x3) / 2 + sp.cos(3 * x3) / 3), bubble * (sp.cos(2 * x3) + sp.Rational(1, 4)),
+            bubble * (sp.sin(x3) - sp.sin(2 * x3) / 2)]
+
+
+def time_function() -> sp.Expr:
+    return 1 - sp.cos(OMEGA * mf.T)
+
+
+def build(body: str, params: dict | None = None) -> Case:
+    """The manufactured scene of ``body`` (``'prism'`` or ``'ring'``) at ``params`` (over :data:`DEFAULTS`)."""
+    p = {**DEFAULTS, **(params or {})}
+    k = 1 if body == RING else sp.pi / LENGTH
+    factor = 1 + p["a"] * sp.cos(VARIATION_MODE * k * mf.X3)
+    terms = mf.motion_body_forces(motion(body), time_function(), body, factor, NU, factor)
+    (s0, s1), (t0, t1) = SPANS[body]
+    section = Section("rect", s=Axis((s0, s1), (PAPER_COUNTS,)), t=Axis((t0, t1), (PAPER_COUNTS,)), edges={})
+    point = POINTS[body]
+    params = dict(p, E=1.0, nu=NU, rho=1.0, tau_s=math.inf, plastic=False, tol=1e-5, dim=2)
+    return Case(
+        name=f"manufactured_{body}", title=f"Manufactured motion of a {body} (code verification)", body=body,
+        section=section, length=LENGTH if body == PRISM else 2 * math.pi, material=Material(1.0, NU, 1.0),
+        loads=(), supports=tuple(Support(e, (1, 2, 3)) for e in ("s_min", "s_max", "t_min", "t_max")),
+        probes=(Probe("u1", "point", "u", (1,), point=point), Probe("u2", "point", "u", (2,), point=point),
+                Probe("u3", "point", "u", (3,), point=point)),
+        params=params, body_forces=terms, variation=((p["a"], VARIATION_MODE),) if p["a"] else (),
+        symmetric=True, units="dimensionless (E = rho = 1)",
+        provenance={"ours": "the whole scene: a chosen motion and the body force that makes it exact"},
+    )
+
+
+def exact(case, t: np.ndarray) -> dict[str, np.ndarray]:
+    """The probes' exact histories at times ``t``."""
+    U, time = motion(case.body), time_function()
+    out = {}
+    for probe in case.probes:
+        x1, x2, x3 = probe.point
+        value = (U[probe.component[0] - 1] * time).subs({mf.X1: x1, mf.X2: x2, mf.X3: x3})
+        out[probe.name] = np.asarray(sp.lambdify(mf.T, value, "numpy")(np.asarray(t, float)), float) + 0.0 * t
+    return out

@@ -1,0 +1,208 @@
+"""Manufactured solutions: the symbolic source terms (cases.manufactured)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from cases import manufactured as mf
+from cases.geometry import PRISM, RING
+
+x, y, z = sp.symbols("x y z", real=True)
+
+
+def cartesian_body_force(u_xyz, E, nu, rho):
+    """rho u_tt - div sigma in cartesian coordinates, written here again, independently of
+    the module: sigma_ij = lambda e_kk delta_ij + 2 mu e_ij."""
+    X = (x, y, z)
+    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    eps = [[(sp.diff(u_xyz[i], X[j]) + sp.diff(u_xyz[j], X[i])) / 2 for j in range(3)] for i in range(3)]
+    tr = eps[0][0] + eps[1][1] + eps[2][2]
+    sig = [[lam * tr * int(i == j) + 2 * mu * eps[i][j] for j in range(3)] for i in range(3)]
+    return [rho * sp.diff(u_xyz[i], mf.T, 2) - sum(sp.diff(sig[i][j], X[j]) for j in range(3)) for i in range(3)]
+
+
+def at(exprs, variables, points):
+    f = sp.lambdify(variables, exprs, "numpy")
+    return np.array([f(*p) for p in points], float)
+
+
+def test_a_rings_body_force_is_the_cartesian_one_turned_into_cylindrical_components():
+    """Several harmonics, material varying around the circumference (E and rho ~ 1 + a cos 2
+    theta): the cylindrical derivation (curvature terms, 1/r derivatives) against a cartesian
+    one of the same motion, at random points."""
+    r, zz, th, t = mf.X1, mf.X2, mf.X3, mf.T
+    bubble = (r - 1) * (2 - r) * zz * (1 - zz)
+    u = [bubble * (sp.cos(th) + sp.Rational(1, 2) * sp.cos(2 * th)) * sp.sin(3 * t),
+         bubble * (1 + sp.cos(3 * th)) * sp.sin(3 * t),
+         bubble * (sp.sin(th) - sp.sin(2 * th)) * sp.sin(3 * t)]
+    E, nu, rho = 200 * (1 + sp.Rational(3, 10) * sp.cos(2 * th)), sp.Rational(3, 10), 7 * (1 + sp.Rational(3, 10) * sp.cos(2 * th))
+    b_cyl = mf.body_force(u, RING, E, nu, rho)
+    # the same motion and material in cartesian coordinates
+    polar = {r: sp.sqrt(x ** 2 + y ** 2), th: sp.atan2(y, x), zz: z}
+    ur, uz, ut = (c.subs(polar) for c in u)
+    cos, sin = x / sp.sqrt(x ** 2 + y ** 2), y / sp.sqrt(x ** 2 + y ** 2)
+    b_xyz = cartesian_body_force([ur * cos - ut * sin, ur * sin + ut * cos, uz], E.subs(polar), nu, rho.subs(polar))
+    rng = np.random.default_rng(3)
+    pts = [(1 + rng.random(), rng.random(), 2 * np.pi * rng.random(), rng.random()) for _ in range(6)]
+    cyl = at(b_cyl, (r, zz, th, t), pts)
+    cart = at(b_xyz, (x, y, z, t), [(p[0] * np.cos(p[2]), p[0] * np.sin(p[2]), p[1], p[3]) for p in pts])
+    theta = np.array([p[2] for p in pts])
+    turned = np.column_stack([cart[:, 0] * np.cos(theta) + cart[:, 1] * np.sin(theta), cart[:, 2],
+                              -cart[:, 0] * np.sin(theta) + cart[:, 1] * np.cos(theta)])
+    assert np.abs(cyl).max() > 1.0
+    assert np.allclose(cyl, turned, rtol=1e-10, atol=1e-10 * np.abs(cyl).max())
+
+
+def test_a_prisms_body_force_with_material_varying_along_its_length():
+    x1, x2, x3, t = mf.X1, mf.X2, mf.X3, mf.T
+    u = [x1 * (1 - x1) * x2 * sp.sin(sp.pi * x3) * t ** 2, x2 ** 2 * sp.sin(2 * sp.pi * x3) * t,
+         x1 * x2 * sp.cos(sp.pi * x3) * t ** 3]
+    E, rho = 3 * (1 + sp.cos(2 * sp.pi * x3) / 4), 2 + x3
+    b = mf.body_force(u, PRISM, E, sp.Rational(1, 4), rho)
+    swap = {x1: x, x2: y, x3: z}
+    ref = cartesian_body_force([c.subs(swap) for c in u], E.subs(swap), sp.Rational(1, 4), rho.subs(swap))
+    assert all(sp.simplify(a.subs(swap) - c) == 0 for a, c in zip(b, ref))
+
+
+def test_a_rigid_motion_needs_no_force_and_a_uniform_strain_no_body_force():
+    x1, x2, x3 = mf.X1, mf.X2, mf.X3
+    # a ring's rigid translation along its axis and rigid rotation about it
+    assert mf.body_force([0, 5, 0], RING, 1, sp.Rational(1, 3), 1) == [0, 0, 0]
+    assert [sp.simplify(c) for c in mf.body_force([0, 0, 2 * x1], RING, 1, sp.Rational(1, 3), 1)] == [0, 0, 0]
+    assert [sp.simplify(c) for c in mf.strains([0, 0, 2 * x1], RING)] == [0] * 6
+    # a uniform strain in a homogeneous prism: stresses, tractions, no body force
+    u = [x1 / 100, -x2 / 300, x3 / 100]
+    assert mf.body_force(u, PRISM, 9, sp.Rational(1, 4), 1) == [0, 0, 0]
+    assert mf.traction(u, PRISM, 9, sp.Rational(1, 4), (1, 0, 0))[1:] == [0, 0]
+
+
+def test_expressions_are_read_from_text_and_evaluated_on_arrays():
+    f = mf.numeric("1 + 0.3*cos(2*x3) * t")
+    x3 = np.linspace(0, 1, 5)
+    assert np.allclose(f(0.0, 0.0, x3, 2.0), 1 + 0.6 * np.cos(2 * x3))
+    assert mf.numeric("7")(np.zeros(4), 0.0, 0.0, 0.0).shape == (4,)
+    with pytest.raises(ValueError, match="unknown names y"):
+        mf.parse("x1 + y")
+
+
+def _errors(body, **params):
+    """SMFEM on the manufactured scene: per probe the relative max-norm error against the exact motion."""
+    from cases import verification
+    from runs.registry import solve
+
+    case = verification.build(body, {"t_end": 0.5, **params})
+    run = solve("smfem", case)
+    assert run.converged
+    exact = verification.exact(case, run.t)
+    return np.array([np.abs(run.history[n] - exact[n]).max() / np.abs(exact[n]).max() for n in exact])
+
+
+@pytest.mark.parametrize("body", [PRISM, RING])
+def test_smfem_converges_at_second_order_in_space_on_the_manufactured_motion(body):
+    """Material varying along x3 (E, rho ~ 1 + 0.3 cos 2 k x3), three harmonics coupled; harmonics
+    and step resolved: the observed order of every displacement component is 2 within 0.2."""
+    errors = [_errors(body, refine=r, harmonics=6, dt=2.5e-3) for r in (1, 2, 4)]
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(np.abs(orders - 2) < 0.2), orders
+
+
+def test_the_harmonics_error_falls_to_the_spatial_floor_once_the_manufactured_ones_are_in():
+    """The ring's motion holds harmonics 0-3, its material 1 + 0.3 cos 2 theta: with 3 harmonics
+    the truncation dominates; with 4 and 8 the error is the mesh's."""
+    three, four, eight = (_errors(RING, refine=2, harmonics=h, dt=2.5e-3) for h in (3, 4, 8))
+    assert three.max() > 5 * four.max()
+    assert np.allclose(four, eight, rtol=0.1)
+
+
+def test_a_dropped_coupling_term_is_caught(monkeypatch):
+    """With the harmonics' coupling integrals cut to their diagonal (the material's variation
+    ignored between harmonics) the error stops falling with the mesh."""
+    import smfem.inhomogeneity as inhomogeneity
+
+    exact_integrals = inhomogeneity.coupling_integrals
+
+    def diagonal_only(modes, case, factor, x3, w):
+        I = exact_integrals(modes, case, factor, x3, w)
+        I[~np.eye(len(modes), dtype=bool)] = 0.0
+        return I
+
+    monkeypatch.setattr(inhomogeneity, "coupling_integrals", diagonal_only)
+    coarse, fine = (_errors(PRISM, refine=r, harmonics=6, dt=2.5e-3) for r in (2, 4))
+    assert np.log2(coarse / fine).min() < 1.0  # second order collapses on at least one component
+
+
+def _scene_text(case) -> str:
+    """The manufactured prism written as a scene file (docs/scenes.md)."""
+    forces = "\n".join(f"[[body_force]]\npattern = {list(f.pattern)!r}\ntime = {f.time!r}\n" for f in case.body_forces)
+    forces = forces.replace("'", '"')
+    p = case.params
+    return f"""\
+name = "mms"
+body = "prism"
+length = {case.length}
+[params]
+dt = {p['dt']}
+t_end = {p['t_end']}
+harmonics = {p['harmonics']}
+E = 1.0
+nu = {p['nu']}
+rho = 1.0
+tau_s = 1.0
+[material]
+variation = [[{case.variation[0][0]}, {case.variation[0][1]}]]
+[section]
+kind = "rect"
+s = {{ breaks = [0.0, 1.0], counts = [4] }}
+t = {{ breaks = [0.0, 1.0], counts = [4] }}
+{''.join(f'[[support]]{chr(10)}edge = "{e}"{chr(10)}components = [1, 2, 3]{chr(10)}' for e in ("s_min", "s_max", "t_min", "t_max"))}
+{forces}
+[[probe]]
+name = "u1"
+kind = "point"
+field = "u"
+component = [1]
+point = [0.5, 0.5, 0.7]
+"""
+
+
+def test_body_forces_and_a_varying_material_come_from_a_scene_file(tmp_path, capsys):
+    from cases import verification
+    from cases.scene_file import from_text
+    from cli import main
+    from runs.registry import solve
+
+    built = verification.build(PRISM, {"t_end": 0.05})
+    text = _scene_text(built)
+    case = from_text(text, "mms.toml")
+    assert case.body_forces == built.body_forces and case.variation == built.variation
+    a, b = solve("smfem", case), solve("smfem", built)
+    assert np.array_equal(a.history["u1"], b.history["u1"]) and np.abs(a.history["u1"]).max() > 0
+    for old, new, needle in [('time = "', 'time = "x1 + ', "time may use t only"),
+                             ('variation = [[0.3', 'variation = [[1.3', "out of range"),
+                             ('pattern = ["', 'pattern = ["1 +* ', "is not an expression")]:
+        path = tmp_path / "bad.toml"
+        path.write_text(text.replace(old, new, 1))
+        assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert needle in err and len(err.strip().splitlines()) == 1, err
+    path = tmp_path / "mms.toml"
+    path.write_text(text)
+    assert main(["run", str(path), "--solver", "reference", "--out", str(tmp_path / "ref"), "--quiet"]) == 2
+    assert "solved by smfem only" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("body", [PRISM, RING])
+def test_smfem_converges_at_newmarks_second_order_in_time(body):
+    """At a fixed mesh and harmonics the step's error is measured by successive halvings (the
+    mesh's own error cancels): the differences fall at order 2 within 0.2."""
+    from cases import verification
+    from runs.registry import solve
+
+    ends = []
+    for dt in (0.05, 0.025, 0.0125):
+        run = solve("smfem", verification.build(body, {"refine": 2, "harmonics": 4, "dt": dt}))
+        ends.append(np.array([run.history[n][-1] for n in ("u1", "u2", "u3")]))
+    d = [np.abs(a - b) for a, b in zip(ends[:-1], ends[1:])]
+    assert np.all(np.abs(np.log2(d[0] / d[1]) - 2) < 0.2), np.log2(d[0] / d[1])
