@@ -101,6 +101,12 @@ def mass(u, v, w):
 
 
 @LinearForm
+def body_force(v, w):
+    """A body force ``w.b`` (mesh-frame components at the quadrature points), times ``w.weight``."""
+    return dot(w.b, v) * w.weight
+
+
+@LinearForm
 def pressure(v, w):
     """Pressure ``w.q`` (compression positive) on the outward normal ``w.n``, times ``w.weight``."""
     return -w.q * dot(w.n, v) * w.weight

@@ -98,6 +98,17 @@ def x3_of(case, rep: str, x: np.ndarray) -> np.ndarray:
     return xc[0]
 
 
+def body_coordinates(case, rep: str, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Body coordinates ``(x1, x2, x3)`` of mesh points ``x``; the direction a 2D model leaves
+    out is NaN (an axisymmetric section's theta, a plane-strain ring's z, a prism's x1)."""
+    xc = to_cartesian(case, rep, x)
+    nan = np.full(xc.shape[1], np.nan)
+    if case.body == RING:
+        x3 = np.mod(np.arctan2(xc[1], xc[0]), 2 * np.pi)
+        return np.hypot(xc[0], xc[1]), (nan if rep == PLANE_STRAIN else xc[2]), (nan if rep == AXISYMMETRIC else x3)
+    return (nan if rep == PLANE_STRAIN else xc[1]), xc[2], xc[0]
+
+
 def section_of(case, rep: str, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Section parameters ``(s, t)`` of mesh points ``x``; a dropped direction gives NaN."""
     xc = to_cartesian(case, rep, x)

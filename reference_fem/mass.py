@@ -24,13 +24,14 @@ from . import forms
 N_GAUSS = 3
 
 
-def consistent_mass(basis, rho: float, axisymmetric: bool) -> sp.csr_matrix:
-    """``int rho u . v`` (times r when axisymmetric) over the elements of ``basis``."""
+def consistent_mass(basis, rho: float, axisymmetric: bool, factor: np.ndarray | None = None) -> sp.csr_matrix:
+    """``int rho u . v`` (times r when axisymmetric) over the elements of ``basis``; ``factor``
+    (n_elements, n_qp): the density's variation at the quadrature points."""
     r = np.asarray(basis.global_coordinates())[0] if axisymmetric else np.ones(basis.dx.shape)
-    return asm(forms.mass, basis, rho=rho, weight=r).tocsr()
+    return asm(forms.mass, basis, rho=rho, weight=r * (1.0 if factor is None else factor)).tocsr()
 
 
-def lumped_mass(basis, rho: float, axisymmetric: bool) -> np.ndarray:
+def lumped_mass(basis, rho: float, axisymmetric: bool, factor: np.ndarray | None = None) -> np.ndarray:
     """Diagonal mass by HRZ lumping (Hinton, Rock & Zienkiewicz 1976), shape ``(n_dof,)``.
 
     Each element's consistent diagonal ``int rho phi_i^2`` is scaled so that it sums to the
@@ -41,7 +42,7 @@ def lumped_mass(basis, rho: float, axisymmetric: bool) -> np.ndarray:
     """
     scalar = CellBasis(basis.mesh, basis.elem.elem, quadrature=basis.quadrature)
     r = np.asarray(scalar.global_coordinates())[0] if axisymmetric else np.ones(scalar.dx.shape)
-    w = rho * scalar.dx * r  # (n_elements, n_qp)
+    w = rho * scalar.dx * r * (1.0 if factor is None else factor)  # (n_elements, n_qp)
     diag = np.array([np.einsum("eq,eq->e", np.asarray(phi[0]) ** 2, w) for phi in scalar.basis])  # (n_local, nel)
     share = diag * (w.sum(axis=1) / diag.sum(axis=0))
     nodes = np.bincount(scalar.element_dofs.ravel(), share.ravel(), minlength=scalar.N)

@@ -10,7 +10,7 @@ from cases.params import UnsupportedCase
 from cases.geometry import PRISM, RING
 
 from . import forms
-from .frames import AXISYMMETRIC, SOLID, in_intervals, section_of, x3_of
+from .frames import AXISYMMETRIC, SOLID, body_coordinates, body_rotation, in_intervals, section_of, x3_of
 from .mass import consistent_mass, lumped_mass, redistributed_mass
 from .mesh import RefMesh, build_mesh
 
@@ -64,14 +64,22 @@ class Model:
             self.B = forms.bbar_operator(self.B, self.weights, self.x_qp, self.basis.dx.shape[1])
         self.lam, self.mu = case.material.lame
         self.D = forms.elastic_matrix(self.lam, self.mu, self.dim)
+        if (case.variation or case.body_forces) and (case.material.plastic or case.wall is not None):
+            raise UnsupportedCase("reference solver: body forces and a varying material are elastic and without "
+                                  "a wall so far")
+        #: E and rho's variation along x3 at the quadrature points (n_qp,), or None
+        self.factor = case.variation_factor(x3_of(case, self.rep, self.x_qp)) if case.variation else None
+        factor = None if self.factor is None else self.factor.reshape(self.basis.dx.shape)
         if lumped:
-            self.M = sp.diags(lumped_mass(self.basis, case.material.rho, axisym)).tocsr()
+            self.M = sp.diags(lumped_mass(self.basis, case.material.rho, axisym, factor)).tocsr()
         else:
-            self.M = consistent_mass(self.basis, case.material.rho, axisym)
+            self.M = consistent_mass(self.basis, case.material.rho, axisym, factor)
         if case.wall is not None and not lumped:
             self.M = redistributed_mass(self.M, self.basis, self.edge_facets(case.wall.edge),
                                         case.material.rho, axisym, INTORDER)
         self.Q = self._load_vector()
+        #: ``(time function, load vector)`` per body-force term of the case
+        self.body_force_terms = [self._body_force_vector(term) for term in case.body_forces]
         self.fixed = self._fixed_dofs()
         if fix_rigid_body and case.body == RING and self.rep != AXISYMMETRIC:
             self.fixed = np.union1d(self.fixed, self._rigid_body_dofs())
@@ -83,7 +91,8 @@ class Model:
 
     def stiffness(self) -> sp.csr_matrix:
         """Elastic stiffness (N/m, or N/m per radian when axisymmetric)."""
-        return forms.stiffness(self.B, self.weights, self.D)
+        weights = self.weights if self.factor is None else self.weights * self.factor
+        return forms.stiffness(self.B, weights, self.D)
 
     def edge_facets(self, edge: str) -> np.ndarray:
         """Boundary facets on a named (or parametric) section edge."""
@@ -131,6 +140,22 @@ class Model:
             weight = x[0] if self.rep == AXISYMMETRIC else np.ones_like(x[0])
             Q += asm(forms.pressure, fb, q=load.q, weight=weight)
         return Q
+
+    def _body_force_vector(self, term):
+        """A body-force term's time function and load vector: its pattern at the quadrature
+        points (body coordinates and components) turned into the mesh frame."""
+        from cases.manufactured import numeric
+
+        x1, x2, x3 = body_coordinates(self.case, self.rep, self.x_qp)
+        b_body = np.array([np.asarray(numeric(c)(x1, x2, x3, 0.0), float) for c in term.pattern])  # (3, n_qp)
+        if not np.isfinite(b_body).all():
+            raise UnsupportedCase(f"reference solver: the body force {term.pattern} varies along a direction "
+                                  f"the {self.rep} model leaves out; use dim=3")
+        R = body_rotation(self.case, self.rep, self.x_qp)  # mesh frame -> body, (n_qp, 3, 3)
+        b_mesh = np.einsum("nji,jn->in", R, b_body)[: self.dim].reshape((self.dim,) + self.basis.dx.shape)
+        r = np.asarray(self.basis.global_coordinates())[0] if self.rep == AXISYMMETRIC else np.ones(self.basis.dx.shape)
+        g = numeric(term.time)
+        return (lambda t: float(g(0.0, 0.0, 0.0, t))), asm(forms.body_force, self.basis, b=b_mesh, weight=r)
 
     def mesh_components(self, components) -> list[int]:
         """Mesh-frame displacement components (0-based) of body ``components`` (1-based).

@@ -28,6 +28,16 @@ def _system(model: Model, c: float):
     return Plastic(model, c, model.case.params["tol"]) if mat.plastic else Elastic(model, c)
 
 
+def load_history(model):
+    """The free dofs' load: the pressures' vector, held from t = 0, or with body-force terms
+    the function ``Q(t)``."""
+    Q = model.Q[model.free]
+    if not model.body_force_terms:
+        return Q
+    terms = [(g, F[model.free]) for g, F in model.body_force_terms]
+    return lambda t: Q + sum(g(t) * F for g, F in terms)
+
+
 def solve(case, progress: Callable[[int, int], None] | None = None, every: int = 0,
           grading: float = 1.0) -> RunResult:
     """Transient response of ``case`` over its time window, Newmark (alpha 0.25, delta 0.5).
@@ -80,7 +90,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     converged, message = True, ""
     zone_steps = {int(round(t / dt)) for t in case.references.get("plastic_zone_times", ())}
     snapshots = []
-    steps = march(system, model.Q[free], zero, v0, dt, n_steps)
+    steps = march(system, load_history(model), zero, v0, dt, n_steps)
     try:
         for n, t, u, v, a, its in steps:
             u_full[free], v_full[free], a_full[free] = u, v, a

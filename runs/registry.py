@@ -43,11 +43,11 @@ def solve(solver: str, case, progress: Callable[[int, int], None] | None = None,
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}: choose one of {', '.join(SOLVERS)}")
     case = with_dim(solver, case)
-    if solver != SMFEM and (case.body_forces or case.variation):
+    if solver in (MODAL, CALCULIX, EXPLICIT) and (case.body_forces or case.variation):
         from cases import UnsupportedCase
 
-        raise UnsupportedCase(f"{case.name}: body forces and a material varying along x3 are solved by smfem only "
-                              f"so far, not by {solver}")
+        raise UnsupportedCase(f"{case.name}: body forces and a material varying along x3 are solved by smfem and the "
+                              f"reference FEM so far, not by {solver}")
     if solver == SMFEM:
         from smfem.options import SolverOptions
         from smfem.solver import solve as smfem
