@@ -12,10 +12,10 @@ import sys
 from cases import ParameterError, UnsupportedCase
 from runs import threads
 
-from . import cases_cmd, compare, export, run, study, truth
+from . import cases_cmd, compare, export, run, study, truth, verify
 from .usage import EXIT_USAGE, Parser, UsageError
 
-SUBCOMMANDS = (cases_cmd, run, export, compare, study, truth)
+SUBCOMMANDS = (cases_cmd, run, export, compare, study, truth, verify)
 
 
 def build_parser() -> Parser:

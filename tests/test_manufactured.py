@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 import sympy as sp
 
@@ -226,3 +227,49 @@ def test_the_reference_converges_on_the_manufactured_prism_faster_than_second_or
         errors.append(np.array([np.abs(run.history[n] - exact[n]).max() / np.abs(exact[n]).max() for n in exact]))
     orders = np.log2(errors[0] / errors[1])
     assert np.all(orders > 3.5), orders
+
+
+def test_smfem_verify_writes_the_orders_and_a_figure_per_solver(tmp_path, capsys, monkeypatch):
+    """The command on a two-ladder plan (the whole quick set takes 20 s: out/verify in the README)."""
+    from cli import main
+    from reports import verification
+
+    small = (verification.Ladder("smfem", PRISM, "space", ({"refine": 1}, {"refine": 2}),
+                                 {"t_end": 0.1, "harmonics": 4, "dt": 5e-3}),
+             verification.Ladder("smfem", PRISM, "time", ({"dt": 0.05}, {"dt": 0.025}, {"dt": 0.0125}),
+                                 {"refine": 1, "harmonics": 4, "t_end": 0.5}))
+    monkeypatch.setattr(verification, "plan", lambda quick=True: small)
+    code = main(["verify", "--out", str(tmp_path), "--quiet"])
+    orders = pd.read_csv(tmp_path / "orders.csv")
+    assert set(orders.parameter) == {"space", "time"} and len(orders) == 6
+    assert (orders.theoretical_order == 2).all() and np.isfinite(orders.observed_order).all()
+    assert code == (0 if orders.within.all() else 1)
+    assert (tmp_path / "figures" / "verification-smfem.png").stat().st_size > 10_000
+    out = capsys.readouterr().out
+    assert "smfem prism space: observed order" in out and f"of 6 within 0.2 of the theory" in out
+
+
+def test_the_reports_code_verification_section_comes_from_its_cached_table(tmp_path):
+    from types import SimpleNamespace
+
+    from reports.cache import code_version
+    from reports.sections import SECTIONS, code_verification, verdict_section
+
+    rows = pd.DataFrame([
+        {"solver": "smfem", "body": "prism", "parameter": "space", "probe": "u1", "levels": "refine=1 refine=2",
+         "errors": "0.08 0.02", "observed_order": 2.0, "theoretical_order": 2.0, "within": True, "cpu_s": 1.0},
+        {"solver": "reference-3d", "body": "prism", "parameter": "space", "probe": "u1",
+         "levels": "refine=1 refine=2", "errors": "0.016 0.0006", "observed_order": 4.7, "theoretical_order": 4.0,
+         "within": False, "cpu_s": 3.0},
+    ])
+    (tmp_path / "runs").mkdir()
+    rows.to_csv(tmp_path / "runs" / f"code-verification-quick-{code_version('smfem')}-{code_version('reference')}.csv",
+                index=False)
+    (section,) = code_verification(SimpleNamespace(settings="quick", out=tmp_path))
+    texts = " ".join(str(b.get("text", b.get("items", ""))) for b in section.blocks)
+    assert section.id == "code-verification" and "1 of 2 probe orders within 0.2" in texts
+    assert "reference-3d prism space u1 (4.70)" in texts
+    assert (tmp_path / "tables" / "code_verification.csv").exists()
+    assert (tmp_path / "figures" / "verification-reference-3d.png").exists()
+    assert code_verification(SimpleNamespace(settings="tiny", out=tmp_path)) == []
+    assert SECTIONS.index(code_verification) == SECTIONS.index(verdict_section) + 1  # before the comparison

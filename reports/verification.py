@@ -1,0 +1,164 @@
+"""Code verification: each solver's observed orders on the manufactured motions.
+
+Solution verification (the truths) says how far a run is from the answer; code verification
+says whether each solver solves the equations it claims to, at the order its discretization
+has (ASME V&V 10/20; Roache; Salari & Knupp). On the manufactured ring and prism
+(:mod:`cases.verification`, exact motion known, material varying along x3) it measures:
+
+- space: the error against the exact motion on successively refined meshes, harmonics and step
+  resolved; the observed order of the finest pair against the element's: SMFEM's bilinear
+  moment-scheme element 2, the reference's quadratic element 4 at its nodes (the probe point is
+  a node; nodal superconvergence on a uniform mesh);
+- time: successive halvings of the step at a fixed mesh, the differences of the end values
+  (the mesh's own error cancels), against Newmark's 2;
+- harmonics (SMFEM): the error with fewer harmonics than the motion holds against the error
+  with all of them and with twice as many: once all are in, it is the mesh's.
+
+Every measure is the relative max-norm error over the history of each displacement probe.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from cases import verification
+from cases.geometry import PRISM, RING
+from runs.registry import REF3D, SMFEM, solve
+
+#: the order each solver's scheme has in each parameter, for the table
+THEORY = {(SMFEM, "space"): 2.0, (SMFEM, "time"): 2.0, (REF3D, "space"): 4.0, (REF3D, "time"): 2.0}
+#: how far an observed order may be from the theory's
+ORDER_TOLERANCE = 0.2
+PROBES = ("u1", "u2", "u3")
+
+
+@dataclass(frozen=True)
+class Ladder:
+    """One measured order: a solver, a body, a parameter and its levels (settings over the
+    manufactured scene's defaults)."""
+
+    solver: str
+    body: str
+    parameter: str
+    levels: tuple[dict, ...]
+    base: dict
+
+
+def plan(quick: bool = True) -> tuple[Ladder, ...]:
+    """The ladders of ``smfem verify``: quick (about a minute on two cores) or full."""
+    short = {"t_end": 0.5}
+    space = (1, 2, 4) if quick else (1, 2, 4, 8)
+    ladders = []
+    for body in (PRISM, RING):
+        ladders += [
+            Ladder(SMFEM, body, "space", tuple({"refine": r} for r in space), {**short, "harmonics": 6, "dt": 2.5e-3}),
+            Ladder(SMFEM, body, "time", tuple({"dt": d} for d in (0.05, 0.025, 0.0125)), {"refine": 2, "harmonics": 4}),
+            Ladder(SMFEM, body, "harmonics", tuple({"harmonics": h} for h in ((3, 4, 8) if body == RING else (2, 3, 6))),
+                   {**short, "refine": 2, "dt": 2.5e-3}),
+        ]
+    ref_space = (1, 2, 4)  # refine 1-2 is pre-asymptotic (nodal orders 3.9-6.1); refine 4 takes 23 s
+    ladders += [
+        Ladder(REF3D, PRISM, "space", tuple({"refine": r} for r in ref_space), {"t_end": 0.25, "dt": 2.5e-3}),
+        Ladder(REF3D, PRISM, "time", tuple({"dt": d} for d in (0.05, 0.025, 0.0125)), {"refine": 1}),
+    ]
+    if not quick:
+        ladders.append(Ladder(REF3D, RING, "space", ({"refine": 1}, {"refine": 2}), {"t_end": 0.25, "dt": 2.5e-3}))
+    return tuple(ladders)
+
+
+def run_level(ladder: Ladder, level: dict, a: float | None = None) -> dict:
+    """One level: per probe its error against the exact motion and its end value, and the CPU."""
+    params = {**ladder.base, **level, **({"a": a} if a is not None else {})}
+    if ladder.solver == REF3D:
+        params["dim"] = 3
+    case = verification.build(ladder.body, params)
+    result = solve(ladder.solver, case)
+    if not result.converged:
+        raise RuntimeError(f"{case.name} ({ladder.solver}, {level}): {result.message}")
+    exact = verification.exact(case, result.t)
+    return {"errors": {p: float(np.abs(result.history[p] - exact[p]).max() / np.abs(exact[p]).max()) for p in PROBES},
+            "ends": {p: float(result.history[p][-1]) for p in PROBES}, "cpu_s": float(result.cpu_time_s),
+            "n_dof": int(result.n_dof)}
+
+
+def measure(ladder: Ladder, runs: list[dict]) -> list[dict]:
+    """Rows of ``orders.csv`` for one ladder: per probe the errors, the observed order of the
+    finest pair and the theory's (harmonics: the floor check)."""
+    rows = []
+    for p in PROBES:
+        errors = [r["errors"][p] for r in runs]
+        row = {"solver": ladder.solver, "body": ladder.body, "parameter": ladder.parameter, "probe": p,
+               "levels": " ".join(_label(lv) for lv in ladder.levels), "errors": " ".join(f"{e:.3g}" for e in errors),
+               "cpu_s": sum(r["cpu_s"] for r in runs)}
+        if ladder.parameter == "space":
+            observed, theory = math.log2(errors[-2] / errors[-1]), THEORY[(ladder.solver, "space")]
+        elif ladder.parameter == "time":
+            d = [abs(a["ends"][p] - b["ends"][p]) for a, b in zip(runs[:-1], runs[1:])]
+            row["differences"] = " ".join(f"{x:.3g}" for x in d)
+            observed, theory = math.log2(d[-2] / d[-1]), THEORY[(ladder.solver, "time")]
+        else:  # harmonics: too few, all the motion holds, twice as many
+            observed, theory = math.nan, math.nan
+            row["too_few_over_all"] = errors[0] / errors[1]
+        # harmonics: once all are in, more change nothing but round-off (the mesh's error stays)
+        within = (abs(observed - theory) <= ORDER_TOLERANCE if theory == theory
+                  else abs(errors[1] - errors[2]) <= 0.1 * errors[1])
+        row.update(observed_order=observed, theoretical_order=theory, within=bool(within))
+        rows.append(row)
+    return rows
+
+
+def _label(level: dict) -> str:
+    return " ".join(f"{k}={v:g}" for k, v in level.items())
+
+
+def verify(quick: bool = True, progress=None) -> pd.DataFrame:
+    """Run every ladder of :func:`plan` and return ``orders.csv``'s table."""
+    rows = []
+    ladders = plan(quick)
+    for i, ladder in enumerate(ladders):
+        rows += measure(ladder, [run_level(ladder, level) for level in ladder.levels])
+        if progress:
+            progress(i + 1, len(ladders))
+    return pd.DataFrame(rows)
+
+
+def write(table: pd.DataFrame, out: Path, csv: str = "orders.csv") -> list[Path]:
+    """``out/orders.csv`` (the report: ``tables/code_verification.csv``) and
+    ``out/figures/verification-SOLVER.png``; returns the figures."""
+    from .figures import verification_orders
+
+    (out / "figures").mkdir(parents=True, exist_ok=True)
+    (out / csv).parent.mkdir(parents=True, exist_ok=True)
+    table.to_csv(out / csv, index=False, float_format="%.4g")
+    return [verification_orders(table, solver, out / "figures" / f"verification-{solver}.png")
+            for solver in table.solver.unique()]
+
+
+def cached(cache_dir: Path, quick: bool) -> pd.DataFrame:
+    """:func:`verify`'s table, kept beside the report's runs by both solvers' code versions (a
+    rebuilt report runs nothing new)."""
+    from .cache import code_version
+
+    path = cache_dir / f"code-verification-{'quick' if quick else 'full'}-{code_version(SMFEM)}-{code_version('reference')}.csv"
+    if not path.exists():
+        cache_dir.mkdir(parents=True, exist_ok=True)
+        verify(quick).to_csv(path, index=False)
+    return pd.read_csv(path)
+
+
+def summary(table: pd.DataFrame) -> list[str]:
+    """One line per solver, body and parameter (what ``smfem verify`` prints)."""
+    lines = []
+    for (solver, body, parameter), rows in table.groupby(["solver", "body", "parameter"], sort=False):
+        if parameter == "harmonics":
+            what = f"error at the spatial floor once all the motion's harmonics are in: {'yes' if rows.within.all() else 'no'}"
+        else:
+            what = (f"observed order {rows.observed_order.min():.2f}-{rows.observed_order.max():.2f} "
+                    f"(theory {rows.theoretical_order.iloc[0]:g})")
+        lines.append(f"{solver} {body} {parameter}: {what}{'' if rows.within.all() else ' (off by more than 0.2)'}")
+    return lines
