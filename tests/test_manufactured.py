@@ -273,3 +273,61 @@ def test_the_reports_code_verification_section_comes_from_its_cached_table(tmp_p
     assert (tmp_path / "figures" / "verification-reference-3d.png").exists()
     assert code_verification(SimpleNamespace(settings="tiny", out=tmp_path)) == []
     assert SECTIONS.index(code_verification) == SECTIONS.index(verdict_section) + 1  # before the comparison
+
+
+def _smfem_uniaxial(E, nu, sy, H, strains):
+    """SMFEM's Wilkins return along a uniaxial strain path: (sigma11, sigma22, alpha) per strain."""
+    from cases.material import lame
+    from smfem.plasticity import wilkins
+
+    lam, mu = lame(E, nu)
+    D = np.zeros((6, 6))
+    D[:3, :3] = lam
+    D[[0, 1, 2], [0, 1, 2]] += 2 * mu
+    D[[3, 4, 5], [3, 4, 5]] = mu
+    sigma, alpha, prev, out = np.zeros(6), np.array(0.0), 0.0, []
+    for e in strains:
+        d = np.zeros(6)
+        d[0], prev = e - prev, e
+        sigma, alpha, _, _ = wilkins(sigma + D @ d, alpha, np.array(mu), sy, H)
+        out.append((sigma[0], sigma[1], float(alpha)))
+    return np.array(out)
+
+
+def _reference_uniaxial(E, nu, sy, H, strains):
+    """The reference's radial return along the same path (Mandel vectors, the state committed each step)."""
+    from cases.material import lame
+    from reference_fem.plasticity import radial_return
+
+    lam, mu = lame(E, nu)
+    eps_p, alpha, out = np.zeros((1, 6)), np.zeros(1), []
+    for e in strains:
+        eps = np.zeros((1, 6))
+        eps[0, 0] = e
+        r = radial_return(eps, eps_p, alpha, lam, mu, sy, H, tangent=False)
+        eps_p, alpha = r.eps_p, r.alpha
+        out.append((r.sigma[0, 0], r.sigma[0, 1], float(r.alpha[0])))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("path", [_smfem_uniaxial, _reference_uniaxial], ids=["smfem", "reference"])
+@pytest.mark.parametrize("H", [0.0, 2.0e9])
+@pytest.mark.parametrize("steps", [1, 40])
+def test_both_return_maps_give_the_closed_form_uniaxial_strain_response(path, H, steps):
+    """Uniaxial strain to 1 %, 8 times the yield strain, in one step or forty: the mean stress is
+    elastic (kappa eps), the stress difference follows the yield stress, sigma11 - sigma22 =
+    sigma_y + H alpha, and alpha = (2/3) (eps - eps_y) 3 mu / (3 mu + H). Radial return is exact
+    on this proportional path whatever the step."""
+    from cases.material import lame
+
+    E, nu, sy = 2.1e11, 0.3, 2.5e8
+    lam, mu = lame(E, nu)
+    eps_y = sy / (2 * mu)
+    strains = np.linspace(0, 8 * eps_y, steps + 1)[1:]
+    s11, s22, alpha = path(E, nu, sy, H, strains).T
+    kappa = lam + 2 * mu / 3
+    a = np.where(strains > eps_y, (2 / 3) * (strains - eps_y) * 3 * mu / (3 * mu + H), 0.0)
+    q = np.where(strains > eps_y, sy + H * a, 2 * mu * strains)
+    assert np.allclose(alpha, a, rtol=1e-12, atol=1e-15)
+    assert np.allclose(s11, kappa * strains + 2 / 3 * q, rtol=1e-12)
+    assert np.allclose(s22, kappa * strains - q / 3, rtol=1e-12)
