@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .geometry import PRISM, RING, BodyForce, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
+from .geometry import PRISM, RING, Force, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
 from .material import Material
 
 
@@ -42,7 +42,7 @@ class Case:
     contrast: float = 1.0
     initial_velocity: tuple[InitialVelocity, ...] = ()
     wall: Wall | None = None
-    body_forces: tuple[BodyForce, ...] = ()
+    forces: tuple[Force, ...] = ()
     #: the material varying smoothly along x3: E and rho times ``1 + sum a cos(m k x3)`` over
     #: the terms ``(a, m)`` (k = 1 on a ring, pi / length on a prism), :meth:`variation_factor`
     variation: tuple[tuple[float, int], ...] = ()

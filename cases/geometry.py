@@ -127,14 +127,18 @@ class Pressure:
 
 
 @dataclass(frozen=True)
-class BodyForce:
-    """A body force per unit volume ``pattern(x1, x2, x3) * time(t)``: ``pattern`` holds the
-    three components (in the body's coordinates, :mod:`cases.manufactured` expressions of
-    ``x1, x2, x3``), ``time`` an expression of ``t``. A case sums its terms: a manufactured
-    motion ``U(x) T(t)`` needs two, ``rho U`` times ``T''`` and ``-div sigma(U)`` times ``T``."""
+class Force:
+    """A distributed force ``pattern(x1, x2, x3) * time(t)``: per unit volume (a body force),
+    or with ``edge`` per unit area of the surface that section edge sweeps (a traction, any
+    direction). ``pattern`` holds the three components (in the body's coordinates,
+    :mod:`cases.manufactured` expressions of ``x1, x2, x3``), ``time`` an expression of ``t``.
+    A case sums its terms: a manufactured motion ``U(x) T(t)`` needs two body forces, ``rho U``
+    times ``T''`` and ``-div sigma(U)`` times ``T``, and on a free edge the traction
+    ``sigma(U) n`` times ``T``."""
 
     pattern: tuple[str, str, str]
     time: str = "1"
+    edge: str | None = None
 
 
 @dataclass(frozen=True)

@@ -101,11 +101,11 @@ def traction(u, body: str, E, nu, normal) -> list[sp.Expr]:
 
 
 def motion_body_forces(U, time, body: str, E, nu, rho) -> tuple:
-    """The body-force terms (:class:`cases.geometry.BodyForce`) that make ``U(x) time(t)`` an
+    """The body-force terms (:class:`cases.geometry.Force`) that make ``U(x) time(t)`` an
     exact motion: ``rho U`` times ``time''`` and ``-div sigma(U)`` times ``time``."""
-    from .geometry import BodyForce
+    from .geometry import Force
 
     time, rho = sp.sympify(time), sp.sympify(rho)
-    inertia = BodyForce(tuple(str(rho * Ui) for Ui in U), str(sp.diff(time, T, 2)))
-    elastic = BodyForce(tuple(str(-d) for d in divergence(stresses(U, body, E, nu), body)), str(time))
+    inertia = Force(tuple(str(rho * Ui) for Ui in U), str(sp.diff(time, T, 2)))
+    elastic = Force(tuple(str(-d) for d in divergence(stresses(U, body, E, nu), body)), str(time))
     return inertia, elastic

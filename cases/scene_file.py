@@ -23,7 +23,7 @@ import numpy as np
 
 from . import dome, notched_cylinder, notched_strip, rod_impact, thick_cylinder
 from .case import Case
-from .geometry import EDGES, PRISM, RING, Axis, BodyForce, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
+from .geometry import EDGES, PRISM, RING, Axis, Force, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
 from .material import Material
 from .params import COMMON, MAX_STRESS, ParameterError, Spec, validate
 
@@ -46,7 +46,7 @@ BOUND = {"contrast": "cutout", "layer_thickness": "wall", "layer_stiffness": "wa
 FEATURES = {"cutout": "[[cutout]]", "wall": "[wall]"}
 
 TOP = ("name", "title", "body", "units", "length", "symmetric", "axisymmetric", "params", "material",
-       "section", "load", "body_force", "support", "cutout", "initial_velocity", "wall", "probe", "references")
+       "section", "load", "body_force", "traction", "support", "cutout", "initial_velocity", "wall", "probe", "references")
 PROBE_KEYS = ("name", "kind", "field", "component", "point", "edge")
 #: probe kind -> the fields it may record
 PROBE_FIELDS = {"point": ("u", "v", "sigma", "peps"), "max": ("peps",), "edge_mean": ("sigma",),
@@ -232,7 +232,8 @@ class _Scene:
             material.fail("E_T", f"{E_T!r} is out of range: the tangent modulus must be below E={p['E']:g}")
         variation = self.read_variation(material)
         loads = tuple(self.read_load(t) for t in top.tables("load", ("q", "edge", "x3_intervals", "mode")))
-        body_forces = tuple(self.read_body_force(t) for t in top.tables("body_force", ("pattern", "time")))
+        forces = tuple(self.read_force(t) for t in top.tables("body_force", ("pattern", "time"))) + \
+            tuple(self.read_force(t, self.edge(t, "edge")) for t in top.tables("traction", ("edge", "pattern", "time")))
         cutouts = tuple(self.read_cutout(t) for t in top.tables("cutout", ("s_range", "t_range", "x3_intervals")))
         wall = self.read_wall(top.table("wall", ("edge", "gap", "friction", "slope"))) if features["wall"] else None
         probes = tuple(self.read_probe(t) for t in top.tables("probe", PROBE_KEYS))
@@ -245,10 +246,10 @@ class _Scene:
             probes=probes, params=p, length=self.length, cutouts=tuple(c for c in cutouts if c is not None),
             contrast=p.get("contrast", 1.0),
             initial_velocity=tuple(self.read_velocity(t) for t in top.tables("initial_velocity", ("component", "value"))),
-            wall=wall, body_forces=body_forces, variation=variation,
+            wall=wall, forces=forces, variation=variation,
             units=top.string("units", Case.__dataclass_fields__["units"].default),
             references=self.read_references(top, probes), source=source,
-            **self.read_symmetry(top, loads, cutouts, wall, body_forces, variation),
+            **self.read_symmetry(top, loads, cutouts, wall, forces, variation),
         )
         self.check_unused(params, features)
         return case
@@ -347,9 +348,10 @@ class _Scene:
         mode = t.integer("mode", 0 if self.body == RING else 1, 2000, None)
         return Pressure(q, edge, () if mode is not None else self.intervals(t, "x3_intervals"), mode)
 
-    def read_body_force(self, t: _Table) -> BodyForce:
-        """``pattern``: three expressions of x1, x2, x3 (the force per unit volume, in the body's
-        components); ``time``: an expression of t that scales it (default 1)."""
+    def read_force(self, t: _Table, edge: str | None = None) -> Force:
+        """``pattern``: three expressions of x1, x2, x3 (the force per unit volume, or with
+        ``edge`` per unit area of that edge's surface, in the body's components); ``time``: an
+        expression of t that scales it (default 1)."""
         pattern = t.array("pattern")
         if len(pattern) != 3 or not all(isinstance(c, str) for c in pattern):
             t.fail("pattern", "give three expressions of x1, x2, x3 as strings, e.g. [\"0\", \"-9.81 * 7800\", \"0\"]")
@@ -365,7 +367,7 @@ class _Scene:
                 if not used <= allowed:
                     t.fail(key, f"{text!r} uses {', '.join(sorted(used - allowed))}: {key} may use "
                                 f"{', '.join(sorted(allowed))} only")
-        return BodyForce(tuple(pattern), time)
+        return Force(tuple(pattern), time, edge)
 
     def read_variation(self, material: _Table) -> tuple[tuple[float, int], ...]:
         """``variation = [[a, m], ...]``: E and rho times ``1 + sum a cos(m k x3)``."""
@@ -450,7 +452,7 @@ class _Scene:
         if not lo <= point[2] <= hi:
             t.fail("point", f"x3 = {point[2]:g} is outside the body: need {lo:g} <= x3 <= {hi:g}")
 
-    def read_symmetry(self, top: _Table, loads, cutouts, wall: Wall | None, body_forces=(), variation=()) -> dict:
+    def read_symmetry(self, top: _Table, loads, cutouts, wall: Wall | None, forces=(), variation=()) -> dict:
         """``symmetric`` and ``axisymmetric`` (ring only), each checked against the loads and
         cut-outs: a wrong claim would make a solver leave out harmonics that carry the answer."""
         if self.body == PRISM:
@@ -468,13 +470,15 @@ class _Scene:
                                          "[[0, 2 pi]], or set axisymmetric = false)")
             if symmetric and mode is None and not _same(circle, _on_circle([(-b, -a) for a, b in intervals])):
                 top.fail("symmetric", f"true, but {where} is not symmetric about x3 = 0 (set symmetric = false)")
-        for i, force in enumerate(body_forces, 1):
-            even, uniform = _body_force_symmetry(force)
+        for i, force in enumerate(forces, 1):
+            even, uniform = _force_symmetry(force)
             if symmetric and not even:
-                top.fail("symmetric", f"true, but body_force[{i}] is not symmetric about x3 = 0 (u_r, u_z even, "
+                top.fail("symmetric", f"true, but force {i} (body_force, then traction) is not symmetric about "
+                                      "x3 = 0 (u_r, u_z even, "
                                       "u_theta odd; set symmetric = false)")
             if axisymmetric and not uniform:
-                top.fail("axisymmetric", f"true, but body_force[{i}] varies along x3 or turns about the axis")
+                top.fail("axisymmetric", f"true, but force {i} (body_force, then traction) varies along x3 "
+                                         "or turns about the axis")
         if axisymmetric and variation:
             top.fail("axisymmetric", "true, but the material varies along x3 (variation)")
         if axisymmetric and wall is not None and wall.slope > 0:
@@ -497,7 +501,7 @@ class _Scene:
         return out
 
 
-def _body_force_symmetry(force) -> tuple[bool, bool]:
+def _force_symmetry(force) -> tuple[bool, bool]:
     """Whether a ring's body force is symmetric about x3 = 0 (components 1, 2 even, 3 odd) and
     whether it is axisymmetric (no x3 dependence, no component 3), tried at sample points."""
     from . import manufactured

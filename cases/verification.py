@@ -5,7 +5,8 @@ here), driven by the body force that makes a chosen smooth motion exact
 (:mod:`cases.manufactured`): a section bubble that vanishes on the edges (sin sin, in no
 element's space), times several
 harmonics along x3, times ``1 - cos(omega t)`` (at rest at t = 0, so no initial conditions are
-needed). The material may vary smoothly along x3 (``a``: E and rho times ``1 + a cos(2 k x3)``),
+needed). With ``free_top`` the top edge is free instead, loaded by the exact traction
+``sigma(U) n`` (the bubble a third of a wave in x2, neither zero nor flat there). The material may vary smoothly along x3 (``a``: E and rho times ``1 + a cos(2 k x3)``),
 which couples the harmonics. Dimensionless units: E = rho = 1, so waves run at about 1.
 
 Both solvers run these as any scene; :func:`exact` gives the probes' exact histories.
@@ -20,7 +21,7 @@ import sympy as sp
 
 from . import manufactured as mf
 from .case import Case
-from .geometry import PRISM, RING, Axis, Probe, Section, Support
+from .geometry import PRISM, RING, Axis, Force, Probe, Section, Support
 from .material import Material
 
 #: the prism's length; the ring's section spans r in [1, 2]
@@ -34,17 +35,20 @@ POINTS = {PRISM: (0.5, 0.5, 0.7), RING: (1.5, 0.5, 0.7)}
 SPANS = {PRISM: ((0.0, 1.0), (0.0, 1.0)), RING: ((1.0, 2.0), (0.0, 1.0))}
 #: the mesh before refine: 4 x 4 elements
 PAPER_COUNTS = 4
-DEFAULTS = dict(dt=2.5e-3, t_end=1.0, refine=1, harmonics=6, a=0.3, dim=2)
+DEFAULTS = dict(dt=2.5e-3, t_end=1.0, refine=1, harmonics=6, a=0.3, dim=2, free_top=False)
 
 
-def motion(body: str) -> list[sp.Expr]:
+def motion(body: str, free_top: bool = False) -> list[sp.Expr]:
     """``U(x1, x2, x3)``: the bubble times harmonics 1-3 (prism: sin in u1, u2, cos in u3;
     ring: cos in u_r, u_z with the axisymmetric term, sin in u_theta)."""
     x1, x2, x3 = mf.X1, mf.X2, mf.X3
     (s0, s1), (t0, t1) = SPANS[body]
     # not a polynomial: no element's space holds it (a quadratic bubble is exact in the
     # reference's section)
-    bubble = sp.sin(sp.pi * (x1 - s0) / (s1 - s0)) * sp.sin(sp.pi * (x2 - t0) / (t1 - t0))
+    # free_top: a third of a wave in x2, neither its value nor its slope zero on the top edge
+    # (a quarter wave's flat top would leave the traction little to do)
+    wave = sp.Rational(2, 3) if free_top else 1
+    bubble = sp.sin(sp.pi * (x1 - s0) / (s1 - s0)) * sp.sin(wave * sp.pi * (x2 - t0) / (t1 - t0))
     if body == PRISM:
         k = sp.pi / LENGTH
         return [bubble * (sp.sin(k * x3) + sp.sin(3 * k * x3) / 2), bubble * sp.sin(2 * k * x3),
@@ -62,7 +66,12 @@ def build(body: str, params: dict | None = None) -> Case:
     p = {**DEFAULTS, **(params or {})}
     k = 1 if body == RING else sp.pi / LENGTH
     factor = 1 + p["a"] * sp.cos(VARIATION_MODE * k * mf.X3)
-    terms = mf.motion_body_forces(motion(body), time_function(), body, factor, NU, factor)
+    U = motion(body, p["free_top"])
+    terms = mf.motion_body_forces(U, time_function(), body, factor, NU, factor)
+    if p["free_top"]:  # the top edge (x2 = max, normal +x2) loaded by sigma(U) n
+        top = [c.subs(mf.X2, SPANS[body][1][1]) for c in mf.traction(U, body, factor, NU, (0, 1, 0))]
+        terms += (Force(tuple(str(c) for c in top), str(time_function()), edge="t_max"),)
+    fixed = ("s_min", "s_max", "t_min") + (() if p["free_top"] else ("t_max",))
     (s0, s1), (t0, t1) = SPANS[body]
     section = Section("rect", s=Axis((s0, s1), (PAPER_COUNTS,)), t=Axis((t0, t1), (PAPER_COUNTS,)), edges={})
     point = POINTS[body]
@@ -70,10 +79,10 @@ def build(body: str, params: dict | None = None) -> Case:
     return Case(
         name=f"manufactured_{body}", title=f"Manufactured motion of a {body} (code verification)", body=body,
         section=section, length=LENGTH if body == PRISM else 2 * math.pi, material=Material(1.0, NU, 1.0),
-        loads=(), supports=tuple(Support(e, (1, 2, 3)) for e in ("s_min", "s_max", "t_min", "t_max")),
+        loads=(), supports=tuple(Support(e, (1, 2, 3)) for e in fixed),
         probes=(Probe("u1", "point", "u", (1,), point=point), Probe("u2", "point", "u", (2,), point=point),
                 Probe("u3", "point", "u", (3,), point=point)),
-        params=params, body_forces=terms, variation=((p["a"], VARIATION_MODE),) if p["a"] else (),
+        params=params, forces=terms, variation=((p["a"], VARIATION_MODE),) if p["a"] else (),
         symmetric=True, units="dimensionless (E = rho = 1)",
         provenance={"ours": "the whole scene: a chosen motion and the body force that makes it exact"},
     )
@@ -81,7 +90,7 @@ def build(body: str, params: dict | None = None) -> Case:
 
 def exact(case, t: np.ndarray) -> dict[str, np.ndarray]:
     """The probes' exact histories at times ``t``."""
-    U, time = motion(case.body), time_function()
+    U, time = motion(case.body, case.params.get("free_top", False)), time_function()
     out = {}
     for probe in case.probes:
         x1, x2, x3 = probe.point

@@ -102,7 +102,8 @@ def mass(u, v, w):
 
 @LinearForm
 def body_force(v, w):
-    """A body force ``w.b`` (mesh-frame components at the quadrature points), times ``w.weight``."""
+    """A distributed force ``w.b`` (mesh-frame components at the quadrature points of the
+    elements, or of boundary facets: a traction), times ``w.weight``."""
     return dot(w.b, v) * w.weight
 
 

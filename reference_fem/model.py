@@ -64,7 +64,7 @@ class Model:
             self.B = forms.bbar_operator(self.B, self.weights, self.x_qp, self.basis.dx.shape[1])
         self.lam, self.mu = case.material.lame
         self.D = forms.elastic_matrix(self.lam, self.mu, self.dim)
-        if (case.variation or case.body_forces) and (case.material.plastic or case.wall is not None):
+        if (case.variation or case.forces) and (case.material.plastic or case.wall is not None):
             raise UnsupportedCase("reference solver: body forces and a varying material are elastic and without "
                                   "a wall so far")
         #: E and rho's variation along x3 at the quadrature points (n_qp,), or None
@@ -79,7 +79,7 @@ class Model:
                                         case.material.rho, axisym, INTORDER)
         self.Q = self._load_vector()
         #: ``(time function, load vector)`` per body-force term of the case
-        self.body_force_terms = [self._body_force_vector(term) for term in case.body_forces]
+        self.force_terms = [self._force_vector(term) for term in case.forces]
         self.fixed = self._fixed_dofs()
         if fix_rigid_body and case.body == RING and self.rep != AXISYMMETRIC:
             self.fixed = np.union1d(self.fixed, self._rigid_body_dofs())
@@ -141,21 +141,26 @@ class Model:
             Q += asm(forms.pressure, fb, q=load.q, weight=weight)
         return Q
 
-    def _body_force_vector(self, term):
-        """A body-force term's time function and load vector: its pattern at the quadrature
-        points (body coordinates and components) turned into the mesh frame."""
+    def _force_vector(self, term):
+        """A force term's time function and load vector: its pattern at the quadrature points of
+        the elements (a body force) or of the edge's boundary facets (a traction), in body
+        coordinates and components, turned into the mesh frame."""
         from cases.manufactured import numeric
 
-        x1, x2, x3 = body_coordinates(self.case, self.rep, self.x_qp)
-        b_body = np.array([np.asarray(numeric(c)(x1, x2, x3, 0.0), float) for c in term.pattern])  # (3, n_qp)
-        if not np.isfinite(b_body).all():
-            raise UnsupportedCase(f"reference solver: the body force {term.pattern} varies along a direction "
+        basis = self.basis if term.edge is None else FacetBasis(
+            self.rmesh.mesh, self.element, facets=self.edge_facets(term.edge), intorder=INTORDER)
+        points = np.asarray(basis.global_coordinates())  # (dim, n, n_qp)
+        shape, x_qp = points.shape[1:], points.reshape(self.dim, -1)
+        x1, x2, x3 = body_coordinates(self.case, self.rep, x_qp)
+        f_body = np.array([np.asarray(numeric(c)(x1, x2, x3, 0.0), float) for c in term.pattern])  # (3, n_qp)
+        if not np.isfinite(f_body).all():
+            raise UnsupportedCase(f"reference solver: the force {term.pattern} varies along a direction "
                                   f"the {self.rep} model leaves out; use dim=3")
-        R = body_rotation(self.case, self.rep, self.x_qp)  # mesh frame -> body, (n_qp, 3, 3)
-        b_mesh = np.einsum("nji,jn->in", R, b_body)[: self.dim].reshape((self.dim,) + self.basis.dx.shape)
-        r = np.asarray(self.basis.global_coordinates())[0] if self.rep == AXISYMMETRIC else np.ones(self.basis.dx.shape)
+        R = body_rotation(self.case, self.rep, x_qp)  # mesh frame -> body, (n_qp, 3, 3)
+        f_mesh = np.einsum("nji,jn->in", R, f_body)[: self.dim].reshape((self.dim,) + shape)
+        r = points[0] if self.rep == AXISYMMETRIC else np.ones(shape)
         g = numeric(term.time)
-        return (lambda t: float(g(0.0, 0.0, 0.0, t))), asm(forms.body_force, self.basis, b=b_mesh, weight=r)
+        return (lambda t: float(g(0.0, 0.0, 0.0, t))), asm(forms.body_force, basis, b=f_mesh, weight=r)
 
     def mesh_components(self, components) -> list[int]:
         """Mesh-frame displacement components (0-based) of body ``components`` (1-based).

@@ -32,9 +32,9 @@ def load_history(model):
     """The free dofs' load: the pressures' vector, held from t = 0, or with body-force terms
     the function ``Q(t)``."""
     Q = model.Q[model.free]
-    if not model.body_force_terms:
+    if not model.force_terms:
         return Q
-    terms = [(g, F[model.free]) for g, F in model.body_force_terms]
+    terms = [(g, F[model.free]) for g, F in model.force_terms]
     return lambda t: Q + sum(g(t) * F for g, F in terms)
 
 

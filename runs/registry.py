@@ -43,7 +43,7 @@ def solve(solver: str, case, progress: Callable[[int, int], None] | None = None,
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}: choose one of {', '.join(SOLVERS)}")
     case = with_dim(solver, case)
-    if solver in (MODAL, CALCULIX, EXPLICIT) and (case.body_forces or case.variation):
+    if solver in (MODAL, CALCULIX, EXPLICIT) and (case.forces or case.variation):
         from cases import UnsupportedCase
 
         raise UnsupportedCase(f"{case.name}: body forces and a material varying along x3 are solved by smfem and the "

@@ -77,14 +77,38 @@ def velocity_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode
 SECTION_POINTS = 3
 
 
-def body_force_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> list[dict[Mode, np.ndarray]]:
-    """Per body-force term of the case, the nodal load amplitude (3 n_nodes,) of every mode:
-    ``int int b(x) N_i psi(x3) dA dx3`` (a ring's area element carries r), by Gauss-Legendre
-    quadrature over each element and along x3."""
+def force_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> list[dict[Mode, np.ndarray]]:
+    """Per force term of the case, the nodal load amplitude (3 n_nodes,) of every mode:
+    ``int int f(x) N_i psi(x3) dA dx3`` over the section (a body force) or ``ds dx3`` along its
+    edge (a traction); a ring's area element carries r. Gauss-Legendre quadrature over each
+    element or edge segment and along x3."""
     from cases.manufactured import numeric
 
-    if not case.body_forces:
+    if not case.forces:
         return []
+    # along x3: enough points for the force's and the modes' variation (checked by doubling in the tests)
+    period = 2 * np.pi if case.body == RING else case.length
+    t3, w3 = np.polynomial.legendre.leggauss(4 * case.harmonics + 64)
+    x3, w3 = 0.5 * period * (t3 + 1), 0.5 * period * w3
+    psi = {m: psi_values(m, x3, case.body, case.length) for m in modes}
+    out = []
+    for term in case.forces:
+        x, weight, N, nodes = _section_points(mesh, case.body) if term.edge is None else _edge_points(mesh, case.body, term.edge)
+        f = [numeric(c)(x[..., 0, None], x[..., 1, None], x3[None, None, :], 0.0) for c in term.pattern]  # (n, ng, n3)
+        amps = {}
+        for m in modes:
+            F = np.zeros((mesh.n_nodes, 3))
+            for c in range(3):
+                along = f[c] @ (psi[m][0 if c < 2 else 1] * w3)  # (n, ng)
+                np.add.at(F[:, c], nodes, np.einsum("eg,ga->ea", along * weight, N))
+            amps[m] = F.ravel()
+        out.append(amps)
+    return out
+
+
+def _section_points(mesh: SectionMesh, body: str):
+    """Quadrature over every element: points (ne, ng, 2), weights (ne, ng; a ring's times r),
+    shape functions (ng, 4) and the elements' nodes."""
     g, gw = np.polynomial.legendre.leggauss(SECTION_POINTS)
     xi, eta = np.meshgrid(0.5 * g, 0.5 * g, indexing="ij")
     w2 = np.outer(0.5 * gw, 0.5 * gw).ravel()
@@ -93,22 +117,17 @@ def body_force_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> list[di
     x = np.einsum("ga,ead->egd", N, X)
     jac = np.abs(np.einsum("ga,ea->eg", dxi, X[..., 0]) * np.einsum("ga,ea->eg", deta, X[..., 1])
                  - np.einsum("ga,ea->eg", deta, X[..., 0]) * np.einsum("ga,ea->eg", dxi, X[..., 1]))
-    weight = jac * w2 * (x[..., 0] if case.body == RING else 1.0)  # (ne, ng)
-    # along x3: enough points for the force's and the modes' variation (checked by doubling in the tests)
-    period = 2 * np.pi if case.body == RING else case.length
-    n3 = 4 * case.harmonics + 64
-    t3, w3 = np.polynomial.legendre.leggauss(n3)
-    x3, w3 = 0.5 * period * (t3 + 1), 0.5 * period * w3
-    psi = {m: psi_values(m, x3, case.body, case.length) for m in modes}
-    out = []
-    for term in case.body_forces:
-        f = [numeric(c)(x[..., 0, None], x[..., 1, None], x3[None, None, :], 0.0) for c in term.pattern]  # (ne, ng, n3)
-        amps = {}
-        for m in modes:
-            F = np.zeros((mesh.n_nodes, 3))
-            for c in range(3):
-                along = f[c] @ (psi[m][0 if c < 2 else 1] * w3)  # (ne, ng)
-                np.add.at(F[:, c], mesh.elements, np.einsum("eg,ga->ea", along * weight, N))
-            amps[m] = F.ravel()
-        out.append(amps)
-    return out
+    return x, jac * w2 * (x[..., 0] if body == RING else 1.0), N, mesh.elements
+
+
+def _edge_points(mesh: SectionMesh, body: str, edge: str):
+    """Quadrature along every segment of a section edge: points (ns, ng, 2), weights (ns, ng;
+    a ring's times r), the segment's linear shape functions (ng, 2) and its nodes."""
+    g, gw = np.polynomial.legendre.leggauss(SECTION_POINTS)
+    s, w = 0.5 * (g + 1), 0.5 * gw
+    N = np.column_stack([1 - s, s])  # (ng, 2)
+    seg, _ = mesh.edge_segments(edge)
+    X = mesh.x[seg]  # (ns, 2, 2)
+    x = np.einsum("ga,sad->sgd", N, X)
+    length = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
+    return x, length[:, None] * w[None, :] * (x[..., 0] if body == RING else 1.0), N, seg

@@ -75,7 +75,7 @@ class Model:
         candidates = fourier.modes(case.body, n_harm, families)
         Q = loads.load_amplitudes(case, self.mesh, candidates)
         V = loads.velocity_amplitudes(case, self.mesh, candidates)
-        terms = loads.body_force_amplitudes(case, self.mesh, candidates)
+        terms = loads.force_amplitudes(case, self.mesh, candidates)
         size = {m: max([np.abs(Q[m]).max(), np.abs(V[m]).max()] + [np.abs(F[m]).max() for F in terms])
                 for m in candidates}
         scale = max(size.values())

@@ -49,12 +49,12 @@ def stacked(model: Model):
     return K, model.mass_matrix(), Q, V0, offsets
 
 
-def body_force_terms(case, model: Model) -> list:
+def force_terms(case, model: Model) -> list:
     """``(g, Q_k)`` per body-force term: its time function and its amplitudes, all modes stacked."""
     from cases.manufactured import numeric
 
     return [(lambda t, f=numeric(term.time): f(0.0, 0.0, 0.0, t),
-             np.concatenate([s.Q_terms[k] for s in model.systems])) for k, term in enumerate(case.body_forces)]
+             np.concatenate([s.Q_terms[k] for s in model.systems])) for k, term in enumerate(case.forces)]
 
 
 def solve(case, options: SolverOptions | None = None, progress=None, with_fields: bool = True,
@@ -81,7 +81,7 @@ def build_system(case, options: SolverOptions):
     if case.wall is not None:
         if plastic:
             raise ModelError(f"{case.name}: contact with plasticity is not supported: set plastic=false")
-        if case.body_forces:
+        if case.forces:
             raise ModelError(f"{case.name}: body forces with a wall are not supported")
         # harmonic 0 alone for an axisymmetric scene, else every mode the wall's symmetry allows
         model = Model(case, nonlinear=not case.axisymmetric)
@@ -98,8 +98,8 @@ def build_system(case, options: SolverOptions):
         K, M, Q, _, _ = stacked(model)
         how = ("direct: the coupled block system, one factorization" if coupled
                else "decoupled harmonics, one block-diagonal factorization")
-        return model, LinearSystem(K, M, Q, case.dt, body_force_terms(case, model)), how
-    if case.body_forces:
+        return model, LinearSystem(K, M, Q, case.dt, force_terms(case, model)), how
+    if case.forces:
         raise ModelError(f"{case.name}: body forces are applied by the elastic direct solve only: set plastic=false "
                          "(and iteration_matrix coupled)")
     if not plastic:  # elastic but not to be factorized whole: the iterations
