@@ -385,7 +385,11 @@ class ContactSystem:
                     self.face_blocks.clear()
                 k = self.face_blocks[key] = self.layer.face_matrix(states)
             Cy = self.layer.face_values(y).ravel() - self.S @ f.ravel()
-            f = f + np.linalg.solve(np.eye(len(k)) + k @ self.S, k @ Cy).reshape(f.shape)
+            try:
+                f = f + np.linalg.solve(np.eye(len(k)) + k @ self.S, k @ Cy).reshape(f.shape)
+            except np.linalg.LinAlgError:  # a layer far stiffer than round-off lets the body answer
+                raise ContactError("the contact layer's face system is singular (the layer against the body "
+                                   "at this step: a far stiffer layer or a far longer step)") from None
         return y - np.concatenate([Z @ fi for Z, fi in zip(self.Z, f)])
 
     def initial_acceleration(self, u: np.ndarray) -> np.ndarray:

@@ -34,7 +34,7 @@ from cases.material import lame
 from . import woodbury
 from .coupling import StackedOperator
 from .linalg import factorize_spd
-from .newmark import Constants, StepFailed
+from .newmark import Constants, Load, StepFailed
 from .options import SolverOptions
 from .plasticity import intensity, return_map_rows
 from .sampling import SamplePoints
@@ -113,7 +113,7 @@ class BlockIterative:
         tolerance, iteration limit and sample points along x3
     """
 
-    def __init__(self, model, dt: float, options: SolverOptions):
+    def __init__(self, model, dt: float, options: SolverOptions, terms=()):
         self.model, self.omega = model, options.relaxation
         self.kind = options.iteration_matrix
         self.memory = options.anderson if self.kind != "sor" else 0
@@ -124,6 +124,9 @@ class BlockIterative:
         S = model.systems
         self.offsets = model.offsets
         self.Q = np.concatenate([s.Q for s in S])
+        #: the load history (the force terms' time functions over the held pressures)
+        self.load = Load(self.Q, terms)
+        self.Q_now = self.Q  # the load of the step being solved
         if self.kind == "coupled":
             self.lus = [factorize_coupled(model, c.a0)]
         else:  # 'matrix-free' and 'sor': one factorization per diagonal block
@@ -172,7 +175,7 @@ class BlockIterative:
         """``M a = Q - K u0`` (no plastic strain at t = 0; ``u0`` is elastic)."""
         if u0.any():
             self.state.sigma = self.points.stress(u0).reshape(6, -1)
-        force = self.Q - self.op.K(u0)
+        force = self.load(0.0) - self.op.K(u0)
         if self.model.coupling:
             return sla.spsolve(self.model.mass_matrix().tocsc(), force)
         return force / self.op.M_h
@@ -190,7 +193,7 @@ class BlockIterative:
         return "", facts
 
     def residual(self, x: np.ndarray, predicted: np.ndarray, loads: np.ndarray) -> np.ndarray:
-        return self.Q + loads - self.op.K(x) - self.c.a0 * self.op.M(x - predicted)
+        return self.Q_now + loads - self.op.K(x) - self.c.a0 * self.op.M(x - predicted)
 
     def correction(self, x: np.ndarray, predicted: np.ndarray, loads: np.ndarray) -> np.ndarray:
         """``A^-1`` times the residual at ``x`` (for ``'sor'``: one block SOR sweep's change)."""
@@ -205,7 +208,7 @@ class BlockIterative:
         o = self.offsets
         new = x.copy()
         for i, (lu, (K, a0M)) in enumerate(zip(self.lus, self.rows)):
-            r = self.Q[o[i]:o[i + 1]] + loads[o[i]:o[i + 1]] - K @ new - a0M @ (new - predicted)
+            r = self.Q_now[o[i]:o[i + 1]] + loads[o[i]:o[i + 1]] - K @ new - a0M @ (new - predicted)
             new[o[i]:o[i + 1]] += self.omega * lu.solve(r)  # (15): the stresses follow elastically
         return new - x
 
@@ -213,6 +216,7 @@ class BlockIterative:
         """One time step's iterations from the last step's ``u``; the new amplitudes and the
         number of iterations (the material state waits for :meth:`commit`)."""
         tick, pts, state = time.perf_counter, self.points, self.state
+        self.Q_now = self.load(t)
         anderson = Anderson(self.memory) if self.memory else None
         x, loads = u, self.loads
         for iteration in range(1, self.max_iter + 1):

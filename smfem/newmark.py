@@ -78,6 +78,17 @@ def march(system, u0: np.ndarray, v0: np.ndarray, dt: float, n_steps: int) -> It
         yield state
 
 
+class Load:
+    """A load history ``Q + sum g_k(t) Q_k``: the pressures' ``Q``, held from t = 0, and the
+    force terms ``(g_k, Q_k)`` (their time functions and amplitudes, all modes stacked)."""
+
+    def __init__(self, Q: np.ndarray, terms=()):
+        self.Q, self.terms = Q, tuple(terms)
+
+    def __call__(self, t: float) -> np.ndarray:
+        return self.Q + sum(float(g(t)) * Qk for g, Qk in self.terms) if self.terms else self.Q
+
+
 class LinearSystem:
     """``M a + K u = Q`` with one factorization of ``K + a0 M`` per time-step size.
 
@@ -91,16 +102,12 @@ class LinearSystem:
     """
 
     def __init__(self, K: sp.spmatrix, M, Q: np.ndarray, dt: float, terms=()):
-        self.K, self.Q, self.terms = K.tocsr(), Q, tuple(terms)
+        self.K, self.load = K.tocsr(), Load(Q, terms)
         self.diagonal_mass = isinstance(M, np.ndarray) and M.ndim == 1
         self.M = M if self.diagonal_mass else sp.csr_matrix(M)
         self.a0M = Constants.of(dt).a0 * self.M
         self.lu = sla.splu((self.K + (sp.diags(self.a0M) if self.diagonal_mass else self.a0M)).tocsc())
         self.factorizations = 1
-
-    def load(self, t: float) -> np.ndarray:
-        """The load at time ``t``."""
-        return self.Q + sum(float(g(t)) * Qk for g, Qk in self.terms) if self.terms else self.Q
 
     def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
         force = self.load(0.0) - self.K @ u0

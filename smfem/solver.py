@@ -99,9 +99,6 @@ def build_system(case, options: SolverOptions):
         how = ("direct: the coupled block system, one factorization" if coupled
                else "decoupled harmonics, one block-diagonal factorization")
         return model, LinearSystem(K, M, Q, case.dt, force_terms(case, model)), how
-    if case.forces:
-        raise ModelError(f"{case.name}: body forces are applied by the elastic direct solve only: set plastic=false "
-                         "(and iteration_matrix coupled)")
     if not plastic:  # elastic but not to be factorized whole: the iterations
         model = Model(case, nonlinear=True)
     n = len(model.systems)
@@ -115,7 +112,8 @@ def build_system(case, options: SolverOptions):
            "sor": f"block-iterative (13)-(16): block SOR over {n} harmonics, omega {options.relaxation:g}"}[kind]
     if kind != "sor" and options.anderson:
         how += f", Anderson acceleration ({options.anderson} iterates)"
-    return model, BlockIterative(model, case.dt, dataclasses.replace(options, iteration_matrix=kind)), how
+    return model, BlockIterative(model, case.dt, dataclasses.replace(options, iteration_matrix=kind),
+                                 force_terms(case, model)), how
 
 
 def _field(model, system, state):

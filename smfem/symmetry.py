@@ -5,6 +5,8 @@ modes of a nonlinear run follow from that symmetry, not from the load alone:
 * ring: reflection about theta = 0 removes the sine family; a rotational period 2 pi / n keeps
   only harmonics that are multiples of n (n = 0: axisymmetric, harmonic 0 only);
 * prism: reflection about mid-span keeps the odd harmonics only.
+Force terms (body forces, tractions) and a material varying along x3 are tried under the same
+maps at sample points (:func:`forces_invariant`).
 A tilted wall (``case.wall.slope``) gives a contact gap varying as cos(x3): the cosine family.
 """
 
@@ -43,6 +45,32 @@ def x3_pattern(case, x3: np.ndarray) -> np.ndarray:
     return out
 
 
+def forces_invariant(case, x3_image, signs=(1.0, 1.0, 1.0)) -> bool:
+    """Whether the case's force terms and material variation are unchanged by the map
+    ``x3 -> x3_image(x3)`` with the components' ``signs`` (a reflection turns the x3 component),
+    tried at sample points of the section."""
+    if not case.forces and not case.variation:
+        return True
+    from cases.manufactured import numeric
+
+    period = 2 * math.pi if case.body == RING else case.length
+    rng = np.random.default_rng(1)
+    (s0, s1), (t0, t1) = case.section.s.span, case.section.t.span
+    s, t = s0 + (s1 - s0) * rng.random(5), t0 + (t1 - t0) * rng.random(5)
+    x1, x2 = case.section.to_x(s, t)
+    x3 = (np.arange(97) + 0.5 * math.sqrt(2)) * period / 97
+    x1, x2, x3 = x1[:, None], x2[:, None], x3[None, :]
+    close = lambda a, b: np.allclose(a, b, rtol=1e-9, atol=1e-12 * (1 + np.abs(a).max()))
+    if not close(case.variation_factor(x3), case.variation_factor(x3_image(x3))):
+        return False
+    for force in case.forces:
+        for c, sign in zip(force.pattern, signs):
+            f = numeric(c)
+            if not close(np.asarray(f(x1, x2, x3, 0.0), float), sign * np.asarray(f(x1, x2, x3_image(x3), 0.0), float)):
+                return False
+    return True
+
+
 def nonlinear_modes(case, candidates: list[Mode]) -> list[Mode]:
     """The candidate modes that the symmetry of the problem allows."""
     period = 2 * math.pi if case.body == RING else case.length
@@ -50,11 +78,15 @@ def nonlinear_modes(case, candidates: list[Mode]) -> list[Mode]:
     g = x3_pattern(case, x)
     same = lambda h: np.allclose(g, h, atol=1e-12 * (1 + np.abs(g).max()))
     if case.body != RING:
-        return [m for m in candidates if m.l % 2 == 1] if same(x3_pattern(case, period - x)) else candidates
-    families = ("c",) if same(x3_pattern(case, -x)) else ("c", "s")
-    if same(np.full_like(g, g.mean())):
+        mirror = same(x3_pattern(case, period - x)) and forces_invariant(case, lambda z: period - z, (1, 1, -1))
+        return [m for m in candidates if m.l % 2 == 1] if mirror else candidates
+    reflect = same(x3_pattern(case, -x)) and forces_invariant(case, lambda z: -z, (1, 1, -1))
+    families = ("c",) if reflect else ("c", "s")
+    turns = lambda k: same(x3_pattern(case, x + period / k)) and forces_invariant(case, lambda z: z + period / k)
+    if same(np.full_like(g, g.mean())) and forces_invariant(case, lambda z: z + 0.618 * period) \
+            and forces_invariant(case, lambda z: z + 0.1 * math.sqrt(2) * period):
         n = 0
     else:
-        n = max(k for k in range(1, 257) if same(x3_pattern(case, x + period / k)))
+        n = max(k for k in range(1, 257) if turns(k))
     keep = lambda m: (m.l == 0) if n == 0 else (m.l % n == 0)
     return [m for m in candidates if m.family in families and keep(m)]

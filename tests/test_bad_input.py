@@ -235,6 +235,16 @@ def test_quasi_static_collapse_is_a_clear_error(solver):
     assert o["code"] in (0, 3) and np.isfinite(o["history"].to_numpy()).all()
 
 
+def test_a_singular_contact_layer_in_an_estimates_companion_is_a_clear_error():
+    """Found by the property test: the rod at E = 1e15 Pa, rho = 1, dt = t_end = 1 s. The run
+    finishes; the coarse companion's contact face system is singular, which raised numpy's
+    LinAlgError through 'smfem run'; now the step fails with a message and the estimate says
+    which companion did not finish."""
+    o = cli_outcome(run_args("rod_impact", "smfem", {"E": 1e15, "rho": 1.0, "gap": 0.017578125, "refine": 1,
+                                                     "harmonics": 1, "dim": 2, "dt": 1.0, "t_end": 1.0}))
+    assert o["code"] in (0, 3) and np.isfinite(o["history"].to_numpy()).all()
+
+
 @pytest.mark.slow
 def test_diverged_plastic_newton_is_reported_not_written_as_nan():
     """Found by the property test: E = 1e15 Pa, tau_s = 1 Pa, rho = 8e-7. The reference's

@@ -370,3 +370,19 @@ def test_the_references_traction_is_applied_on_its_boundary_facets():
     settings = {"refine": 1, "dim": 3, "harmonics": 6, "dt": 5e-3, "t_end": 1.0}
     loaded, without = _top_errors(REF, PRISM, **settings), _top_errors(REF, PRISM, drop_traction=True, **settings)
     assert (without / loaded).max() > 5
+
+
+@pytest.mark.parametrize("body, kind", [(PRISM, "matrix-free"), (RING, "sor")])
+def test_the_iterative_systems_take_the_forces_as_the_direct_solve_does(body, kind):
+    """SMFEM's additional-loads iterations (the plastic path, here elastic) with the body forces
+    and the varying material: the same motion as the direct solve, every harmonic kept (the
+    forces' and the variation's symmetry decide which modes a nonlinear run keeps)."""
+    from cases import verification
+    from runs.registry import solve
+
+    case = verification.build(body, {"refine": 1, "harmonics": 6, "dt": 5e-3, "t_end": 0.3})
+    direct, iterated = solve(SMFEM, case), solve(SMFEM, case, options={"iteration_matrix": kind, "tolerance": 1e-10})
+    assert "(13)-(16)" in iterated.info["solve"]
+    for n in direct.history:
+        scale = np.abs(direct.history[n]).max()
+        assert scale > 0 and np.abs(iterated.history[n] - direct.history[n]).max() < 1e-6 * scale, n
