@@ -141,6 +141,10 @@ class Force:
     edge: str | None = None
 
 
+#: two shifts along x3, as fractions of the period, under which only a uniform pattern is unchanged
+UNIFORM_SHIFTS = (0.618, 0.1 * math.sqrt(2))
+
+
 @dataclass(frozen=True)
 class Support:
     """Zero displacement of ``components`` (1-based) on ``edge``, or on every node if ``edge='all'``."""

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import functools
 
+import numpy as np
 import sympy as sp
 
 from .geometry import PRISM, RING
@@ -43,10 +44,33 @@ def parse(text: str) -> sp.Expr:
 def numeric(text: str):
     """``f(x1, x2, x3, t)`` of an expression string, vectorised over numpy arrays (a constant
     comes back broadcast to the shape of its arguments)."""
-    import numpy as np
-
     f = sp.lambdify(VARIABLES, parse(text), "numpy")
     return lambda x1, x2, x3, t: np.broadcast_to(f(x1, x2, x3, t), np.broadcast(x1, x2, x3, t).shape)
+
+
+def time_function(text: str):
+    """``g(t)`` of a force's time expression, a float for a float ``t``."""
+    g = numeric(text)
+    return lambda t: float(g(0.0, 0.0, 0.0, t))
+
+
+def forces_invariant(forces, section, period: float, x3_image, signs=(1.0, 1.0, 1.0)) -> bool:
+    """Whether force terms (:class:`cases.geometry.Force`) are unchanged by the map
+    ``x3 -> x3_image(x3)`` with the components' ``signs`` (a reflection turns the x3 component;
+    the identity with sign -1 on it asks whether that component is zero), tried at sample points
+    of ``section`` and along ``period``."""
+    rng = np.random.default_rng(1)
+    (s0, s1), (t0, t1) = section.s.span, section.t.span
+    x1, x2 = section.to_x(s0 + (s1 - s0) * rng.random(5), t0 + (t1 - t0) * rng.random(5))
+    x3 = (np.arange(97) + 0.5 * 2 ** 0.5) * period / 97  # off any simple fraction of the period
+    x1, x2, x3 = np.asarray(x1)[:, None], np.asarray(x2)[:, None], x3[None, :]
+    for force in forces:
+        for c, sign in zip(force.pattern, signs):
+            f = numeric(c)
+            a, b = np.asarray(f(x1, x2, x3, 0.0), float), sign * np.asarray(f(x1, x2, x3_image(x3), 0.0), float)
+            if not np.allclose(a, b, rtol=1e-9, atol=1e-12 * (1 + np.abs(a).max())):
+                return False
+    return True
 
 
 def strains(u, body: str) -> list[sp.Expr]:

@@ -19,11 +19,10 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from . import dome, notched_cylinder, notched_strip, rod_impact, thick_cylinder
 from .case import Case
-from .geometry import EDGES, PRISM, RING, Axis, Force, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
+from .geometry import (EDGES, PRISM, RING, UNIFORM_SHIFTS, Axis, Cutout, Force, InitialVelocity, Pressure, Probe,
+                       Section, Support, Wall)
 from .material import Material
 from .params import COMMON, MAX_STRESS, ParameterError, Spec, validate
 
@@ -470,8 +469,14 @@ class _Scene:
                                          "[[0, 2 pi]], or set axisymmetric = false)")
             if symmetric and mode is None and not _same(circle, _on_circle([(-b, -a) for a, b in intervals])):
                 top.fail("symmetric", f"true, but {where} is not symmetric about x3 = 0 (set symmetric = false)")
+        if forces:
+            from .manufactured import forces_invariant  # sympy: only for a scene that has forces
         for i, force in enumerate(forces, 1):
-            even, uniform = _force_symmetry(force)
+            even = forces_invariant((force,), self.section, TWO_PI, lambda z: -z, (1, 1, -1))
+            # the same all round: unchanged by any turn, and no hoop component
+            uniform = all(forces_invariant((force,), self.section, TWO_PI, lambda z, a=a: z + a * TWO_PI)
+                          for a in UNIFORM_SHIFTS) and forces_invariant((force,), self.section, TWO_PI,
+                                                                        lambda z: z, (1, 1, -1))
             if symmetric and not even:
                 top.fail("symmetric", f"true, but force {i} (body_force, then traction) is not symmetric about "
                                       "x3 = 0 (u_r, u_z even, "
@@ -499,23 +504,6 @@ class _Scene:
             singular = t.table("singular_probes", tuple(p.name for p in probes))
             out["singular_probes"] = {k: singular.string(k) for k in singular.data}
         return out
-
-
-def _force_symmetry(force) -> tuple[bool, bool]:
-    """Whether a ring's body force is symmetric about x3 = 0 (components 1, 2 even, 3 odd) and
-    whether it is axisymmetric (no x3 dependence, no component 3), tried at sample points."""
-    from . import manufactured
-
-    rng = np.random.default_rng(0)
-    x1, x2, x3 = rng.random(16) + 0.5, rng.random(16), TWO_PI * rng.random(16)
-    f = [np.asarray(manufactured.numeric(c)(x1, x2, x3, 0.0), float) for c in force.pattern]
-    g = [np.asarray(manufactured.numeric(c)(x1, x2, -x3, 0.0), float) for c in force.pattern]
-    h = [np.asarray(manufactured.numeric(c)(x1, x2, 0 * x3, 0.0), float) for c in force.pattern]
-    scale = max(max(np.abs(v).max() for v in f), 1e-300)
-    close = lambda a, b: np.allclose(a, b, rtol=1e-9, atol=1e-12 * scale)
-    even = close(f[0], g[0]) and close(f[1], g[1]) and close(f[2], -g[2])
-    uniform = close(f[0], h[0]) and close(f[1], h[1]) and close(f[2], 0 * f[2])
-    return even, uniform
 
 
 def _merged(pieces) -> list[tuple[float, float]]:

@@ -124,26 +124,25 @@ def _stored_truth(case):
     return None if truth.params and physics(truth.params) != physics(case.params) else truth
 
 
-def _truth_floor(case) -> float | None:
-    """Three times the stored truth's uncertainty over a built-in scene's displacement and
+def _truth_floor(case, truth) -> float | None:
+    """Three times the stored ``truth``'s uncertainty over a built-in scene's displacement and
     velocity probes (what no run can be shown to beat); None without a stored truth of the
     case's physics."""
     from reports.metrics import TRUTH_MARGIN
 
-    truth = _stored_truth(case)
     if truth is None:
         return None
     u = truth.uncertainty_of([p.name for p in case.probes if p.field in ("u", "v")])
     return TRUTH_MARGIN * u if u == u else None
 
 
-def _front_start(case, solver: str, target: float):
+def _front_start(case, truth, solver: str, target: float):
     """Where ``--tol`` starts on a built-in scene whose front is stored (``truths/CASE/front.csv``,
     measured against the same truth): the cheapest measured settings within ``target``, else the
     most accurate; (overrides, their measured error) or None."""
     from reports.stored import read_front
 
-    front = read_front(case.name) if _stored_truth(case) is not None else None
+    front = read_front(case.name) if truth is not None else None
     if front is None:
         return None
     name = solver if solver != REFERENCE else {2: REF2D, 3: REF3D}.get(case.params.get("dim", 2))
@@ -181,11 +180,12 @@ def _to_tolerance(case, args, out: Path) -> int:
     target = parse_target(args.tol)
     if args.solver not in ESTIMATED:
         raise UsageError(f"--tol needs the error estimate (smfem or reference), not {args.solver}")
-    floor = _truth_floor(case)
+    truth = _stored_truth(case)  # read once: the floor and the front both need it
+    floor = _truth_floor(case, truth)
     if floor is not None and target < floor:
         raise UsageError(f"--tol {args.tol}: below three times {case.name}'s stored truth uncertainty "
                          f"({100 * floor:.2g} %): no run can be shown to reach it")
-    start = _front_start(case, args.solver, target)
+    start = _front_start(case, truth, args.solver, target)
     if args.estimate == "off" and (start is None or start[1] > target):
         raise UsageError(f"--tol {args.tol} --estimate off: only where a built-in scene's measured front reaches the "
                          "target (its error against the truth stands for the run's); elsewhere --tol needs the estimate")
@@ -205,10 +205,12 @@ def _to_tolerance(case, args, out: Path) -> int:
         return EXIT_NOT_CONVERGED
     best = found.best
     tolerance = {"target": target, "met": found.met, "runs": [
-        {"settings": {"refine": a.case.refine, "coarsen": a.case.params.get("coarsen", 1), "harmonics": a.case.harmonics,
-                      "dt": a.case.dt}, "estimate": None if math.isinf(a.error) else a.error, "measured_against_truth": a.measured, "valid": a.valid,
-         "cpu_s": a.cpu_s} for a in found.attempts], "cpu_s": found.cpu_s}
-    _write_checked(out, best.case, args.solver, best.result, best.wall_s, best.estimate if args.estimate == "on" else None, tolerance=tolerance)
+        {"settings": {"refine": a.case.refine, "coarsen": a.case.params.get("coarsen", 1),
+                      "harmonics": a.case.harmonics, "dt": a.case.dt},
+         "estimate": None if math.isinf(a.error) else a.error, "measured_against_truth": a.measured,
+         "valid": a.valid, "cpu_s": a.cpu_s} for a in found.attempts], "cpu_s": found.cpu_s}
+    _write_checked(out, best.case, args.solver, best.result, best.wall_s,
+                   best.estimate if args.estimate == "on" else None, tolerance=tolerance)
     outside = "" if best.valid else " (outside the small-strain model: no accuracy of the physical body is claimed)"
     if not found.met:
         print(f"smfem: {case.name}: --tol {100 * target:g} % not met within --max-cpu {args.max_cpu:g} s: best "

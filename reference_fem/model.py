@@ -145,7 +145,7 @@ class Model:
         """A force term's time function and load vector: its pattern at the quadrature points of
         the elements (a body force) or of the edge's boundary facets (a traction), in body
         coordinates and components, turned into the mesh frame."""
-        from cases.manufactured import numeric
+        from cases.manufactured import numeric, time_function
 
         basis = self.basis if term.edge is None else FacetBasis(
             self.rmesh.mesh, self.element, facets=self.edge_facets(term.edge), intorder=INTORDER)
@@ -159,8 +159,7 @@ class Model:
         R = body_rotation(self.case, self.rep, x_qp)  # mesh frame -> body, (n_qp, 3, 3)
         f_mesh = np.einsum("nji,jn->in", R, f_body)[: self.dim].reshape((self.dim,) + shape)
         r = points[0] if self.rep == AXISYMMETRIC else np.ones(shape)
-        g = numeric(term.time)
-        return (lambda t: float(g(0.0, 0.0, 0.0, t))), asm(forms.body_force, basis, b=f_mesh, weight=r)
+        return time_function(term.time), asm(forms.body_force, basis, b=f_mesh, weight=r)
 
     def mesh_components(self, components) -> list[int]:
         """Mesh-frame displacement components (0-based) of body ``components`` (1-based).

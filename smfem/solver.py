@@ -51,10 +51,10 @@ def stacked(model: Model):
 
 def force_terms(case, model: Model) -> list:
     """``(g, Q_k)`` per body-force term: its time function and its amplitudes, all modes stacked."""
-    from cases.manufactured import numeric
+    from cases.manufactured import time_function
 
-    return [(lambda t, f=numeric(term.time): f(0.0, 0.0, 0.0, t),
-             np.concatenate([s.Q_terms[k] for s in model.systems])) for k, term in enumerate(case.forces)]
+    return [(time_function(term.time), np.concatenate([s.Q_terms[k] for s in model.systems]))
+            for k, term in enumerate(case.forces)]
 
 
 def solve(case, options: SolverOptions | None = None, progress=None, with_fields: bool = True,

@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from cases.geometry import RING
+from cases.geometry import RING, UNIFORM_SHIFTS
 
 from .fourier import Mode
 
@@ -47,28 +47,15 @@ def x3_pattern(case, x3: np.ndarray) -> np.ndarray:
 
 def forces_invariant(case, x3_image, signs=(1.0, 1.0, 1.0)) -> bool:
     """Whether the case's force terms and material variation are unchanged by the map
-    ``x3 -> x3_image(x3)`` with the components' ``signs`` (a reflection turns the x3 component),
-    tried at sample points of the section."""
+    ``x3 -> x3_image(x3)`` with the components' ``signs`` (a reflection turns the x3 component)."""
     if not case.forces and not case.variation:
         return True
-    from cases.manufactured import numeric
+    from cases.manufactured import forces_invariant as invariant  # sympy: only for a case that has forces
 
     period = 2 * math.pi if case.body == RING else case.length
-    rng = np.random.default_rng(1)
-    (s0, s1), (t0, t1) = case.section.s.span, case.section.t.span
-    s, t = s0 + (s1 - s0) * rng.random(5), t0 + (t1 - t0) * rng.random(5)
-    x1, x2 = case.section.to_x(s, t)
     x3 = (np.arange(97) + 0.5 * math.sqrt(2)) * period / 97
-    x1, x2, x3 = x1[:, None], x2[:, None], x3[None, :]
-    close = lambda a, b: np.allclose(a, b, rtol=1e-9, atol=1e-12 * (1 + np.abs(a).max()))
-    if not close(case.variation_factor(x3), case.variation_factor(x3_image(x3))):
-        return False
-    for force in case.forces:
-        for c, sign in zip(force.pattern, signs):
-            f = numeric(c)
-            if not close(np.asarray(f(x1, x2, x3, 0.0), float), sign * np.asarray(f(x1, x2, x3_image(x3), 0.0), float)):
-                return False
-    return True
+    return np.allclose(case.variation_factor(x3), case.variation_factor(x3_image(x3)), rtol=1e-9, atol=1e-12) \
+        and invariant(case.forces, case.section, period, x3_image, signs)
 
 
 def nonlinear_modes(case, candidates: list[Mode]) -> list[Mode]:
@@ -83,8 +70,8 @@ def nonlinear_modes(case, candidates: list[Mode]) -> list[Mode]:
     reflect = same(x3_pattern(case, -x)) and forces_invariant(case, lambda z: -z, (1, 1, -1))
     families = ("c",) if reflect else ("c", "s")
     turns = lambda k: same(x3_pattern(case, x + period / k)) and forces_invariant(case, lambda z: z + period / k)
-    if same(np.full_like(g, g.mean())) and forces_invariant(case, lambda z: z + 0.618 * period) \
-            and forces_invariant(case, lambda z: z + 0.1 * math.sqrt(2) * period):
+    if same(np.full_like(g, g.mean())) and all(forces_invariant(case, lambda z, a=a: z + a * period)
+                                               for a in UNIFORM_SHIFTS):
         n = 0
     else:
         n = max(k for k in range(1, 257) if turns(k))

@@ -90,13 +90,19 @@ def test_expressions_are_read_from_text_and_evaluated_on_arrays():
         mf.parse("x1 + y")
 
 
-def _errors(body, **params):
-    """SMFEM on the manufactured scene: per probe the relative max-norm error against the exact motion."""
+def _errors(body, solver=SMFEM, drop_traction=False, **params):
+    """A run of the manufactured scene (over 0.5 s unless ``t_end`` says otherwise): per probe the
+    relative max-norm error against the exact motion; ``drop_traction``: without the force terms
+    on edges (with ``free_top``, the traction that makes the motion exact)."""
+    from dataclasses import replace
+
     from cases import verification
     from runs.registry import solve
 
     case = verification.build(body, {"t_end": 0.5, **params})
-    run = solve("smfem", case)
+    if drop_traction:
+        case = replace(case, forces=tuple(f for f in case.forces if f.edge is None))
+    run = solve(solver, case)
     assert run.converged
     exact = verification.exact(case, run.t)
     return np.array([np.abs(run.history[n] - exact[n]).max() / np.abs(exact[n]).max() for n in exact])
@@ -221,15 +227,7 @@ def test_the_reference_converges_on_the_manufactured_prism_faster_than_second_or
     superconvergence on a uniform mesh). On the two coarsest meshes (seconds) the observed orders
     are 3.9-6.1, pre-asymptotic; refine 2 to 4 (23 s, left to the verification command) gives
     3.9-4.4. Asserted here: well above SMFEM's 2, which a wrong body force or variation would not give."""
-    from cases import verification
-    from runs.registry import solve
-
-    errors = []
-    for refine in (1, 2):
-        case = verification.build(PRISM, {"refine": refine, "dim": 3, "t_end": 0.25, "dt": 2.5e-3})
-        run = solve("reference", case)
-        exact = verification.exact(case, run.t)
-        errors.append(np.array([np.abs(run.history[n] - exact[n]).max() / np.abs(exact[n]).max() for n in exact]))
+    errors = [_errors(PRISM, REF, refine=refine, dim=3, t_end=0.25, dt=2.5e-3) for refine in (1, 2)]
     orders = np.log2(errors[0] / errors[1])
     assert np.all(orders > 3.5), orders
 
@@ -338,37 +336,22 @@ def test_both_return_maps_give_the_closed_form_uniaxial_strain_response(path, H,
     assert np.allclose(s22, kappa * strains - q / 3, rtol=1e-12)
 
 
-def _top_errors(solver, body, drop_traction=False, **params):
-    """Errors on the manufactured scene with its top edge free and loaded by the exact traction."""
-    from dataclasses import replace
-
-    from cases import verification
-    from runs.registry import solve
-
-    case = verification.build(body, {"free_top": True, **params})
-    if drop_traction:
-        case = replace(case, forces=tuple(f for f in case.forces if f.edge is None))
-    run = solve(solver, case)
-    exact = verification.exact(case, run.t)
-    return np.array([np.abs(run.history[n] - exact[n]).max() / np.abs(exact[n]).max() for n in exact])
-
-
 @pytest.mark.parametrize("body", [PRISM, RING])
 def test_a_traction_on_a_free_edge_converges_and_a_missing_one_is_caught(body):
     """The top edge free, loaded by sigma(U) n (a traction in every direction, varying along the
     edge and along x3): SMFEM's order stays 2 within 0.2; without the traction the error stops
     falling."""
     # a whole second: the top edge's waves reach the probe point by about t = 0.4
-    settings = {"harmonics": 6, "dt": 5e-3, "t_end": 1.0}
-    coarse, fine = (_top_errors(SMFEM, body, refine=r, **settings) for r in (1, 2))
+    settings = {"free_top": True, "harmonics": 6, "dt": 5e-3, "t_end": 1.0}
+    coarse, fine = (_errors(body, refine=r, **settings) for r in (1, 2))
     assert np.all(np.abs(np.log2(coarse / fine) - 2) < 0.2), np.log2(coarse / fine)
-    without = _top_errors(SMFEM, body, drop_traction=True, refine=2, **settings)
+    without = _errors(body, drop_traction=True, refine=2, **settings)
     assert (without / fine).max() > 5  # the probe components the top's traction drives
 
 
 def test_the_references_traction_is_applied_on_its_boundary_facets():
-    settings = {"refine": 1, "dim": 3, "harmonics": 6, "dt": 5e-3, "t_end": 1.0}
-    loaded, without = _top_errors(REF, PRISM, **settings), _top_errors(REF, PRISM, drop_traction=True, **settings)
+    settings = {"free_top": True, "refine": 1, "dim": 3, "harmonics": 6, "dt": 5e-3, "t_end": 1.0}
+    loaded, without = _errors(PRISM, REF, **settings), _errors(PRISM, REF, drop_traction=True, **settings)
     assert (without / loaded).max() > 5
 
 
@@ -386,3 +369,51 @@ def test_the_iterative_systems_take_the_forces_as_the_direct_solve_does(body, ki
     for n in direct.history:
         scale = np.abs(direct.history[n]).max()
         assert scale > 0 and np.abs(iterated.history[n] - direct.history[n]).max() < 1e-6 * scale, n
+
+
+RING_SCENE = """\
+name = "gravity_ring"
+body = "ring"
+{claim} = true
+[params]
+dt = 1e-5
+t_end = 3e-5
+harmonics = 4
+E = 2.1e11
+nu = 0.3
+rho = 7800
+tau_s = 1.7e8
+[section]
+kind = "rect"
+s = {{ breaks = [1.0, 1.2], counts = [2] }}
+t = {{ breaks = [0.0, 0.2], counts = [2] }}
+[[support]]
+edge = "s_min"
+components = [1, 2, 3]
+[[body_force]]
+pattern = [{pattern}]
+[[probe]]
+name = "uz"
+kind = "point"
+field = "u"
+component = [2]
+point = [1.2, 0.1, 0.0]
+"""
+
+
+@pytest.mark.parametrize("claim, pattern, refused", [
+    ("symmetric", '"0", "-7.8e4 * (1 + 0.2 * cos(2 * x3))", "sin(x3)"', ""),
+    ("symmetric", '"0", "x3", "0"', "is not symmetric about x3 = 0"),
+    ("symmetric", '"0", "0", "cos(x3)"', "is not symmetric about x3 = 0"),
+    ("axisymmetric", '"x1", "-7.8e4", "0"', ""),
+    ("axisymmetric", '"0", "cos(x3)", "0"', "varies along x3 or turns about the axis"),
+    ("axisymmetric", '"0", "0", "1"', "varies along x3 or turns about the axis"),
+])
+def test_a_rings_symmetry_claims_are_checked_against_its_body_forces(tmp_path, capsys, claim, pattern, refused):
+    from cli import main
+
+    path = tmp_path / "ring.toml"
+    path.write_text(RING_SCENE.format(claim=claim, pattern=pattern))
+    code = main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet", "--estimate", "off", "--no-fields"])
+    assert code == (2 if refused else 0)
+    assert refused in capsys.readouterr().err
