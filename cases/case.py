@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .geometry import PRISM, RING, Force, Cutout, InitialVelocity, Pressure, Probe, Section, Support, Wall
+from .geometry import PRISM, RING, Force, Cutout, Motion, InitialVelocity, Pressure, Probe, Section, Support, Wall
 from .material import Material
 
 
@@ -43,6 +43,8 @@ class Case:
     initial_velocity: tuple[InitialVelocity, ...] = ()
     wall: Wall | None = None
     forces: tuple[Force, ...] = ()
+    #: the exact motion, when the scene is manufactured to have one
+    exact: Motion | None = None
     #: the material varying smoothly along x3: E and rho times ``1 + sum a cos(m k x3)`` over
     #: the terms ``(a, m)`` (k = 1 on a ring, pi / length on a prism), :meth:`variation_factor`
     variation: tuple[tuple[float, int], ...] = ()

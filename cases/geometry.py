@@ -141,6 +141,17 @@ class Force:
     edge: str | None = None
 
 
+@dataclass(frozen=True)
+class Motion:
+    """A known exact displacement ``pattern(x1, x2, x3) * time(t)`` (body components,
+    :mod:`cases.manufactured` expressions), as a manufactured scene has: a solver given one
+    reports the relative L2 error of its displacement over the body at the last step
+    (``info['error_l2']``), each with its own shape functions and quadrature."""
+
+    pattern: tuple[str, str, str]
+    time: str = "1"
+
+
 #: two shifts along x3, as fractions of the period, under which only a uniform pattern is unchanged
 UNIFORM_SHIFTS = (0.618, 0.1 * math.sqrt(2))
 

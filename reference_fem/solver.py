@@ -12,6 +12,7 @@ from cases.params import UnsupportedCase
 from cases.result import RunResult
 
 from .equilibrium import Elastic, NotConverged, Plastic
+from .exact import error_l2
 from .frames import AXISYMMETRIC, mesh_frame_to_cartesian, to_cartesian
 from .mesh import build_mesh, vtk_cells
 from .model import INTORDER, Model
@@ -109,12 +110,13 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
         converged = False
         message = f"step {len(times)} (t = {len(times) * dt:.6g} s) did not converge: {err}"
     cpu = time.process_time() - cpu1
+    exact = {} if case.exact is None else {"error_l2": error_l2(model, u_full, case.exact, times[-1])}
     history = {name: np.array([r[k] for r in rows]) for k, name in enumerate(probes.names)}
     return RunResult(
         t=np.array(times), history=history, n_dof=int(free.size), iterations=iterations,
         converged=converged, message=message, cpu_time_s=cpu, snapshots=snapshots,
         mesh=output_mesh(model, u_full, system, v_full), frames=frames,
-        info=dict(_info(model, system, cpu_mesh), grading=grading, **(log.info() if log else {})),
+        info=dict(_info(model, system, cpu_mesh), grading=grading, **(log.info() if log else {}), **exact),
     )
 
 

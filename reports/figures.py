@@ -190,29 +190,31 @@ _STEP = {"space": ("refine", "mesh size h / h(refine 1), -"), "time": ("dt", "ti
 
 
 def verification_orders(table, solver: str, path: Path) -> Path:
-    """Code verification of one solver: per parameter (space, time) the largest error over the
-    displacement probes against the mesh size or step, log-log, per body, with the theory's
-    slope dashed through the finest point."""
+    """Code verification of one solver: per parameter, log-log per body, the L2 error against the
+    mesh size (space) and the largest step-halving difference over the displacement probes
+    against the step (time), with the theory's slope dashed through the finest point."""
     rows = table[(table.solver == solver) & table.parameter.isin(list(_STEP))]
     params = [p for p in _STEP if p in set(rows.parameter)]
     fig, axes = plt.subplots(1, len(params), figsize=(3.4 * len(params) + 0.6, 3.3), squeeze=False)
     for ax, parameter in zip(axes[0], params):
         key, xlabel = _STEP[parameter]
+        ticks = set()
         for k, (body, group) in enumerate(rows[rows.parameter == parameter].groupby("body", sort=False)):
             x = np.array([float(level.split("=")[1]) for level in group.levels.iloc[0].split(" ")])
             x = 1.0 / x if key == "refine" else x
             column = "differences" if parameter == "time" else "errors"
             y = np.max([[float(v) for v in text.split()] for text in group[column]], axis=0)
             x = x[1:] if parameter == "time" else x  # a difference belongs to the finer of its pair
-            ax.loglog(x, y, marker="os"[k % 2], color=f"C{k}", label=f"{body}: {group.observed_order.min():.2f}"
-                      f"-{group.observed_order.max():.2f}")
+            ticks |= set(x)
+            lo, hi = group.observed_order.min(), group.observed_order.max()
+            ax.loglog(x, y, marker="os"[k % 2], color=f"C{k}", label=f"{body}: {lo:.2f}" + ("" if lo == hi else f"-{hi:.2f}"))
             theory = group.theoretical_order.iloc[0]
             ax.loglog(x, y[-1] * (x / x[-1]) ** theory, ls="--", color=f"C{k}", lw=0.8)
         for axis in (ax.xaxis, ax.yaxis):  # a short log range labels its minor ticks, one over another
             axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-        ax.set_xticks(x, [f"{v:g}" for v in x])  # the levels themselves
+        ax.set_xticks(sorted(ticks), [f"{v:g}" for v in sorted(ticks)])  # the levels themselves
         ax.set_xlabel(xlabel)
-        ax.set_ylabel("relative error, -" if parameter == "space" else "step-halving difference, -")
+        ax.set_ylabel("relative L2 error, -" if parameter == "space" else "step-halving difference, -")
         ax.set_title(f"{parameter} (dashed: order {rows[rows.parameter == parameter].theoretical_order.iloc[0]:g})",
                      fontsize=8)
         ax.legend(fontsize=7, title="observed order", title_fontsize=7)

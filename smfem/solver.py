@@ -25,6 +25,7 @@ from cases.result import RunResult
 
 from . import woodbury
 from .contact import ContactSystem
+from .exact import error_l2
 from .fields import field_mesh
 from .iterative import BlockIterative
 from .model import Model, ModelError
@@ -158,8 +159,11 @@ def _run(case, model, system, how, progress, with_fields, cpu0, every=0) -> RunR
     message = message or verdict
     done = len(iterations) + 1
     mesh = _field(model, system, state) if with_fields else None
+    cpu = time.process_time() - cpu0
+    if case.exact is not None and state is not None:  # a measurement, not part of the solve's CPU
+        info["error_l2"] = error_l2(model, np.split(state.u, model.offsets[1:-1]), case.exact, state.n * case.dt)
     return RunResult(
         t=np.arange(done) * case.dt, history={name: values[:done, j] for j, name in enumerate(probes.names)},
         n_dof=model.n_dof, iterations=iterations, converged=not message, message=message,
-        cpu_time_s=time.process_time() - cpu0, mesh=mesh, info=info, snapshots=snapshots, frames=frames,
+        cpu_time_s=cpu, mesh=mesh, info=info, snapshots=snapshots, frames=frames,
     )
