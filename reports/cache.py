@@ -1,9 +1,13 @@
 """Finished runs on disk, keyed by case, resolved parameters, solver and code version.
 
 A run's directory holds what ``smfem run`` writes (``history.csv``, ``summary.json``, maybe
-``fields.vtu`` and ``plastic_zones.npz``) and ``job.json`` (the key's ingredients and the
-outcome). The code version is a hash of the sources a solver's results depend on, so editing
-the reference solver does not throw away SMFEM runs, and the other way round.
+``fields.vtu`` and ``plastic_zones.npz``) and ``job.json`` (the key's ingredients, the outcome
+and each file's sha256). The code version is a hash of the sources a solver's results depend
+on, so editing the reference solver does not throw away SMFEM runs, and the other way round.
+
+Writes are atomic; reads are checked: an entry whose ``job.json`` does not parse, or whose
+files are missing or differ from their checksums (a disk error, a hand edit, a copy cut
+short), is never used. It is run again, with one line saying so.
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ import importlib.util
 import json
 import os
 import shutil
+import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -80,11 +85,17 @@ class Run:
         return self.history is not None and len(self.history) > 1
 
 
-class RunCache:
-    """Directory ``root/CASE/SOLVER/KEY`` per run."""
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
 
-    def __init__(self, root: Path):
+
+class RunCache:
+    """Directory ``root/CASE/SOLVER/KEY`` per run; ``warn`` takes the line that names a damaged
+    entry (default: stderr)."""
+
+    def __init__(self, root: Path, warn=None):
         self.root = Path(root)
+        self.warn = warn or (lambda line: print(line, file=sys.stderr))
 
     def path(self, job: Job) -> Path:
         key = key_of(job)
@@ -92,10 +103,15 @@ class RunCache:
         return self.root / job.case / job.solver / digest
 
     def load(self, job: Job) -> Run | None:
-        """The stored run of ``job``, or None if it has not run with this code version."""
+        """The stored run of ``job``, or None if it has not run with this code version or its
+        entry is damaged (then said, and run again)."""
         path = self.path(job)
         meta = path / "job.json"
         if not meta.exists():
+            return None
+        damage = _damage(path)
+        if damage:
+            self.warn(f"cache: {job.describe()}: {damage} ({path}); running it again")
             return None
         record = json.loads(meta.read_text())
         return _read(job, record["status"], record["message"], path)
@@ -111,12 +127,30 @@ class RunCache:
         for name, data in (outcome.files or {}).items():
             (tmp / name).write_bytes(data)
         record = {"key": key_of(job), "overrides": dict(job.overrides), "status": outcome.status,
-                  "message": outcome.message}
+                  "message": outcome.message,
+                  "files": {name: _sha256(data) for name, data in sorted((outcome.files or {}).items())}}
         (tmp / "job.json").write_text(json.dumps(record, indent=2, default=str))
         if path.exists():
             shutil.rmtree(path)
         os.replace(tmp, path)
         return _read(job, outcome.status, outcome.message, path)
+
+
+def _damage(path: Path) -> str:
+    """What is wrong with the entry at ``path`` ('' if nothing): its record, a file, a checksum."""
+    try:
+        record = json.loads((path / "job.json").read_text())
+        files = record["files"]
+        record["status"], record["message"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return "job.json is not a record this version writes"
+    for name, digest in files.items():
+        file = path / name
+        if not file.is_file():
+            return f"{name} is missing"
+        if _sha256(file.read_bytes()) != digest:
+            return f"{name} differs from its checksum"
+    return ""
 
 
 def _read(job: Job, status: str, message: str, path: Path) -> Run:
