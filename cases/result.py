@@ -13,6 +13,32 @@ import numpy as np
 
 
 @dataclass
+class ZoneSnapshot:
+    """The equivalent plastic strain at one time, cell by cell in the plane both solvers draw
+    in (the x-y plane of a ring, the (r, z) half-plane of an axisymmetric ring, the (span,
+    height) plane of a prism).
+
+    Attributes
+    ----------
+    t : time, s
+    poly : (n, 4, 2) cell corners
+    peps : (n,) cell means
+    peak : the largest point value (what the ``peps_max`` probe gives; a cell's mean stays below it)
+    solid : (n,) False where the cell lies in a cut-out (SMFEM's fictitious material); None: all solid
+    """
+
+    t: float
+    poly: np.ndarray
+    peps: np.ndarray
+    peak: float
+    solid: np.ndarray | None = None
+
+    @property
+    def solid_cells(self) -> np.ndarray:
+        return np.ones(len(self.peps), bool) if self.solid is None else self.solid
+
+
+@dataclass
 class RunResult:
     """Histories and facts of one run.
 
@@ -27,8 +53,7 @@ class RunResult:
     mesh : synthesized 3-D field at the last computed step, or None
     info : solver-specific facts (``harmonics_used``, factorizations, ...; each solver's
         ``solve`` lists its own)
-    snapshots : plastic strain at the case's plastic-zone times (``{'t', 'poly', 'peps'}``, see
-        :mod:`runs.zones`)
+    snapshots : :class:`ZoneSnapshot` at the case's plastic-zone times
     frames : ``(t, mesh)`` of the field every N steps, t = 0 included, when a time series was
         asked for (``--every N``); else empty
     """

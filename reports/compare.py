@@ -33,7 +33,7 @@ def comparison_table(smfem_result, reference_result) -> pd.DataFrame:
                      "smfem_peak": float(np.abs(a).max()), "reference_peak": float(np.abs(b).max())})
     for a, b in zip(smfem_result.snapshots, reference_result.snapshots):
         sa, sb = plastic_area(a), plastic_area(b)
-        rows.append({"probe": f"plastic_area@{a['t']:.6g}", "measure": "zone area",
+        rows.append({"probe": f"plastic_area@{a.t:.6g}", "measure": "zone area",
                      "relative_error": (sa - sb) / sb if sb > 0 else (0.0 if sa == 0 else float("inf")),
                      "smfem_peak": sa, "reference_peak": sb})
     return pd.DataFrame(rows)

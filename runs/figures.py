@@ -157,7 +157,7 @@ def plane_labels(case) -> tuple[str, str]:
     return f"x3 (along the prism), {unit}", f"height, {unit}"
 
 
-def plastic_zones(rows: dict[str, list[dict]], path: Path, title: str, case) -> Path:
+def plastic_zones(rows: dict[str, list], path: Path, title: str, case) -> Path:
     """One row of panels per solver (label -> snapshots of :mod:`runs.zones`), one panel per
     time: cells whose mean equivalent plastic strain reaches 0.1 % coloured by it on one scale
     for all rows, each panel titled with the zone's area and the largest point value (what the
@@ -166,10 +166,10 @@ def plastic_zones(rows: dict[str, list[dict]], path: Path, title: str, case) -> 
     are drawn as well. Axes and areas in ``case``'s length unit."""
     axes_labels, length_unit = plane_labels(case), case.unit_of("u")
     rows = {label: snaps for label, snaps in rows.items() if snaps}
-    vmax = max([100 * s["peps"].max() for snaps in rows.values() for s in snaps] + [0.2])
+    vmax = max([100 * s.peps.max() for snaps in rows.values() for s in snaps] + [0.2])
     ncol = max(len(snaps) for snaps in rows.values())
-    cutouts = next((s["poly"][~s["solid"]] for snaps in rows.values() for s in snaps
-                    if "solid" in s and not s["solid"].all()), np.empty((0, 4, 2)))
+    cutouts = next((s.poly[~s.solid_cells] for snaps in rows.values() for s in snaps
+                    if not s.solid_cells.all()), np.empty((0, 4, 2)))
     fig, axes = plt.subplots(len(rows), ncol, figsize=(4.4 * ncol + 0.9, 4.8 * len(rows) + 0.5), squeeze=False,
                              layout="compressed")  # the layout for equal-aspect panels
     cells = None
@@ -177,8 +177,7 @@ def plastic_zones(rows: dict[str, list[dict]], path: Path, title: str, case) -> 
         for ax in axrow[len(snaps):]:
             ax.axis("off")
         for ax, snap in zip(axrow, snaps):
-            poly, value = snap["poly"], snap["peps"]
-            solid = snap.get("solid", np.ones(len(value), bool))
+            poly, value, solid = snap.poly, snap.peps, snap.solid_cells
             ax.add_collection(PolyCollection(poly[solid], facecolors="none", edgecolors="0.85", linewidths=0.1))
             if len(cutouts):  # filled, not hatched: thousands of hatched cells took seconds per panel
                 ax.add_collection(PolyCollection(cutouts, facecolors=CUTOUT, edgecolors="none"))
@@ -188,8 +187,8 @@ def plastic_zones(rows: dict[str, list[dict]], path: Path, title: str, case) -> 
             ax.add_collection(cells)
             ax.autoscale()
             ax.set_aspect("equal")
-            ax.set_title(f"{label}, t = {1e3 * snap['t']:.4g} ms\nplastic area {_area(plastic_area(snap))} "
-                         f"{length_unit}\u00b2 (cell means >= 0.1 %)\nlargest point value {100 * snap['peak']:.3g} %",
+            ax.set_title(f"{label}, t = {1e3 * snap.t:.4g} ms\nplastic area {_area(plastic_area(snap))} "
+                         f"{length_unit}\u00b2 (cell means >= 0.1 %)\nlargest point value {100 * snap.peak:.3g} %",
                          fontsize=8)
             ax.set_xlabel(axes_labels[0], fontsize=7)
             ax.set_ylabel(axes_labels[1], fontsize=7)

@@ -1,6 +1,5 @@
-"""Plastic-zone snapshots of an SMFEM run: cells in the plotting plane and their equivalent
-plastic strain, ``{"t", "poly": (n, 4, 2), "peps": (n,), "peak", "solid": (n,)}`` (the format of
-:mod:`runs.zones`)."""
+"""Plastic-zone snapshots of an SMFEM run (:class:`cases.result.ZoneSnapshot`): cells in the
+plotting plane and their equivalent plastic strain."""
 
 from __future__ import annotations
 
@@ -8,10 +7,12 @@ import math
 
 import numpy as np
 
+from cases.result import ZoneSnapshot
+
 from .inhomogeneity import element_factor
 
 
-def smfem_snapshot(t: float, model, case, peps: np.ndarray, x3: np.ndarray) -> dict:
+def smfem_snapshot(t: float, model, case, peps: np.ndarray, x3: np.ndarray) -> ZoneSnapshot:
     """Snapshot of SMFEM's ``peps`` (elements, section points, the x3 points ``x3``): per cell
     the element mean (a zone area that converges with the mesh), and ``peak``, the largest
     point value (the quantity of the ``peps_max`` probe, past 0.1 % before any mean is).
@@ -22,7 +23,7 @@ def smfem_snapshot(t: float, model, case, peps: np.ndarray, x3: np.ndarray) -> d
     """
     X, value, peak = model.mesh.element_x(), peps.mean(axis=1), float(peps.max())  # (ne, 4, 2), (ne, nq)
     if case.body == "ring" and case.axisymmetric:
-        return {"t": t, "poly": X, "peps": value.max(axis=1), "peak": peak, "solid": np.ones(len(X), bool)}
+        return ZoneSnapshot(t, X, value.max(axis=1), peak, np.ones(len(X), bool))
     solid = element_factor(case, model.mesh, x3) == 1.0  # (ne, nq)
     lo1, hi1 = X[:, :, 0].min(1), X[:, :, 0].max(1)
     lo2, hi2 = X[:, :, 1].min(1), X[:, :, 1].max(1)
@@ -40,4 +41,4 @@ def smfem_snapshot(t: float, model, case, peps: np.ndarray, x3: np.ndarray) -> d
         z0, z1 = np.broadcast_to(lo2[:, None], A.shape), np.broadcast_to(hi2[:, None], A.shape)
         poly = np.stack([np.stack([A, z0], -1), np.stack([B, z0], -1), np.stack([B, z1], -1),
                          np.stack([A, z1], -1)], axis=2)
-    return {"t": t, "poly": poly.reshape(-1, 4, 2), "peps": value.ravel(), "peak": peak, "solid": solid.ravel()}
+    return ZoneSnapshot(t, poly.reshape(-1, 4, 2), value.ravel(), peak, solid.ravel())

@@ -22,12 +22,12 @@ def test_compare_writes_both_runs_the_table_and_zones_side_by_side(tmp_path, cap
     for solver in ("smfem", "reference"):
         assert (tmp_path / solver / "history.csv").exists() and (tmp_path / solver / "summary.json").exists()
         snaps = zones.load(tmp_path / solver / "plastic_zones.npz")
-        assert [round(s["t"], 6) for s in snaps] == [1.4e-3, 2.28e-3]
+        assert [round(s.t, 6) for s in snaps] == [1.4e-3, 2.28e-3]
         history = pd.read_csv(tmp_path / solver / "history.csv")
         for snap in snaps:  # the figure names the largest point value: peps_max at that time
-            peak = history.peps_max[np.isclose(history.t, snap["t"], rtol=0, atol=1e-9)].item()
-            assert snap["peak"] == pytest.approx(peak, rel=1e-6) and snap["peps"].max() <= snap["peak"]
-        assert (snaps[0]["peps"] >= 1e-3).sum() == 0 < (snaps[1]["peps"] >= 1e-3).sum()  # yielding starts between
+            peak = history.peps_max[np.isclose(history.t, snap.t, rtol=0, atol=1e-9)].item()
+            assert snap.peak == pytest.approx(peak, rel=1e-6) and snap.peps.max() <= snap.peak
+        assert (snaps[0].peps >= 1e-3).sum() == 0 < (snaps[1].peps >= 1e-3).sum()  # yielding starts between
     with Image.open(tmp_path / "plastic_zones.png") as im:
         width, height = im.size
     assert height > 0.8 * width  # two rows of panels: SMFEM above the reference

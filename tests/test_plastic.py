@@ -118,9 +118,9 @@ def test_plastic_run_writes_the_plastic_zones_at_the_paper_times(tmp_path):
     image = mpimg.imread(tmp_path / "plastic_zones.png")
     assert image.shape[0] > 300 and image.shape[1] > 600
     result = solve(get_case("notched_strip", {"harmonics": 20}), with_fields=False)
-    assert [round(s["t"], 9) for s in result.snapshots] == [0.96e-4, 3.2e-4]
-    late = result.snapshots[-1]["peps"]
-    assert (late >= 1e-3).sum() > (result.snapshots[0]["peps"] >= 1e-3).sum() > 0  # the hinge grows
+    assert [round(s.t, 9) for s in result.snapshots] == [0.96e-4, 3.2e-4]
+    late = result.snapshots[-1].peps
+    assert (late >= 1e-3).sum() > (result.snapshots[0].peps >= 1e-3).sum() > 0  # the hinge grows
 
 
 def test_stacked_solve_of_a_homogeneous_body_equals_the_papers_block_sweep():

@@ -85,7 +85,7 @@ def test_plastic_notched_displacements_within_five_percent(name, smfem_sets, ref
         # the zones themselves agree: areas measured -4.3 %, +1.5 %, -5.3 % at 6, 8, 10 ms (256 x3
         # points; on 66 the early zone was 18 % small: SolverOptions.x3_min_points)
         for a, b in zip(s.snapshots, r.snapshots, strict=True):
-            assert abs(plastic_area(a) / plastic_area(b) - 1) < 0.10, a["t"]
+            assert abs(plastic_area(a) / plastic_area(b) - 1) < 0.10, a.t
 
 
 def test_plastic_strip_without_the_notch_agrees_to_its_plastic_strains():
