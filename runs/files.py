@@ -10,6 +10,7 @@ import meshio
 import numpy as np
 import pandas as pd
 
+from cases.result import RunResult
 from smfem import __version__
 
 from . import validity
@@ -26,7 +27,8 @@ def summary(case, solver: str, result, wall_time_s: float, checked: dict | None 
         "n_steps": len(result.iterations),
         "wall_time_s": wall_time_s,
         "cpu_time_s": result.cpu_time_s,
-        "iterations": {"mean": float(its.mean()) if its.size else 0.0, "max": int(its.max()) if its.size else 0},
+        "iterations": {"mean": float(its.mean()) if its.size else 0.0, "max": int(its.max()) if its.size else 0,
+                       "per_step": [int(i) for i in result.iterations]},
         "converged": bool(result.converged),
         "message": result.message,
         "harmonics_used": result.info.get("harmonics_used"),
@@ -89,3 +91,36 @@ def write_run(out: Path, case, solver: str, result, wall_time_s: float, zone_fig
         if zone_figure:
             plastic_zones({solver: result.snapshots}, out / "plastic_zones.png", f"{case.name}: plastic zones", case)
     return written
+
+
+def read_run(path: Path) -> tuple[RunResult, dict]:
+    """The :class:`RunResult` that :func:`write_run` took, read back from its directory, and the
+    summary.json beside it: the histories (to the 10 significant digits history.csv keeps), the
+    per-step iterations, the facts, the last field (fields.vtu), the time series (fields.pvd) and
+    the plastic zones (plastic_zones.npz). ``info`` is as JSON holds it (a non-finite number
+    as its string)."""
+    path = Path(path)
+    table = pd.read_csv(path / "history.csv")
+    written = json.loads((path / "summary.json").read_text())
+    info = dict(written.get("info") or {})
+    if written.get("harmonics_used") is not None:
+        info["harmonics_used"] = written["harmonics_used"]
+    frames = []
+    if (path / "fields.pvd").exists():
+        import xml.etree.ElementTree as ET
+
+        for entry in ET.parse(path / "fields.pvd").iter("DataSet"):
+            frames.append((float(entry.get("timestep")), meshio.read(path / entry.get("file"))))
+    snapshots = []
+    if (path / "plastic_zones.npz").exists():
+        from .zones import load
+
+        snapshots = load(path / "plastic_zones.npz")
+    result = RunResult(
+        t=table["t"].to_numpy(), history={c: table[c].to_numpy() for c in table.columns if c != "t"},
+        n_dof=int(written["n_dof"]), iterations=list((written.get("iterations") or {}).get("per_step", [])),
+        converged=bool(written["converged"]), message=written.get("message", ""),
+        cpu_time_s=float(written["cpu_time_s"]),
+        mesh=meshio.read(path / "fields.vtu") if (path / "fields.vtu").exists() else None,
+        info=info, snapshots=snapshots, frames=frames)
+    return result, written
