@@ -9,10 +9,10 @@ from pathlib import Path
 
 from cases import get_case, parse_sets, rebuild
 from runs import validity
-from runs.estimate import ESTIMATED, estimate, summary_line
+from runs.estimate import estimate, summary_line
 from runs.files import write_run
 from runs.progress import Progress
-from runs.registry import CALCULIX, EXPLICIT, REF2D, REF3D, REFERENCE, SMFEM, solve
+from runs.registry import FRAMES, SMFEM, family, lookup, named_for, solve, solvers
 from runs.tolerance import search
 
 from .usage import EXIT_NOT_CONVERGED, UsageError, add_sets, check_writable
@@ -21,7 +21,7 @@ from .usage import EXIT_NOT_CONVERGED, UsageError, add_sets, check_writable
 def add(sub) -> None:
     run = sub.add_parser("run", help="run one case and write history.csv, summary.json, fields.vtu")
     run.add_argument("case")
-    run.add_argument("--solver", choices=(SMFEM, REFERENCE, CALCULIX, EXPLICIT), default=SMFEM,
+    run.add_argument("--solver", choices=[s.name for s in solvers() if s.command_line], default=SMFEM,
                      help="calculix: CalculiX (ccx on PATH) on the reference mesh, --set dim=2|3; "
                           "reference-explicit: the reference's mesh with central differences on a lumped "
                           "mass at half the critical step (the truth engine; dt is the output interval)")
@@ -48,8 +48,8 @@ def command(args) -> int:
         raise UsageError(f"--every {args.every}: between 1 and the case's {case.n_steps} steps (0: no time series)")
     out = Path(args.out or f"out/{case.name}-{args.solver}")
     check_writable(out)
-    if args.solver == CALCULIX and args.every:
-        raise UsageError("--every: the time series is written by smfem and reference only")
+    if args.every and FRAMES not in lookup(args.solver).supports:
+        raise UsageError(f"--every: {args.solver} writes no time series")
     if args.tol is not None:
         return _to_tolerance(case, args, out)
     wall0 = time.perf_counter()
@@ -57,7 +57,7 @@ def command(args) -> int:
                     fields=not args.no_fields, every=args.every)
     wall = time.perf_counter() - wall0
     est = None
-    if args.estimate == "on" and result.converged and args.solver in ESTIMATED:
+    if args.estimate == "on" and result.converged and lookup(args.solver).estimated:
         est = estimate(case, args.solver, result, run=lambda solver, companion: _solve(
             solver, companion, f"{companion.name} ({solver}, error-estimate companion)", args.quiet))
     est = _write_checked(out, case, args.solver, result, wall, est)
@@ -78,7 +78,7 @@ def _write_checked(out: Path, case, solver: str, result, wall_s: float, est: dic
     check = validity.check(case, result)
     if est is not None and not check["valid"]:
         est = {**est, "claim": "none: the run is outside the small-strain model (validity)"}
-    write_run(out, case, solver, result, wall_s,
+    write_run(out, case, family(solver), result, wall_s,
               extra={"validity": check, **({"error_estimate": est} if est else {}), **extra})
     warning = validity.warning_line(case, check)
     if warning:
@@ -145,8 +145,7 @@ def _front_start(case, truth, solver: str, target: float):
     front = read_front(case.name) if truth is not None else None
     if front is None:
         return None
-    name = solver if solver != REFERENCE else {2: REF2D, 3: REF3D}.get(case.params.get("dim", 2))
-    rows = front[(front.solver == name) & front.total.notna()]
+    rows = front[(front.solver == named_for(solver, case)) & front.total.notna()]
     if not len(rows):
         return None
     within = rows[rows.total <= target]
@@ -178,8 +177,9 @@ def _achieved(attempt) -> str:
 def _to_tolerance(case, args, out: Path) -> int:
     """``--tol``: the search of :mod:`runs.tolerance`, one line per run, the best run written."""
     target = parse_target(args.tol)
-    if args.solver not in ESTIMATED:
-        raise UsageError(f"--tol needs the error estimate (smfem or reference), not {args.solver}")
+    if not lookup(args.solver).estimated:
+        estimated = " or ".join(s.name for s in solvers() if s.estimated and s.command_line)
+        raise UsageError(f"--tol needs the error estimate ({estimated}), not {args.solver}")
     truth = _stored_truth(case)  # read once: the floor and the front both need it
     floor = _truth_floor(case, truth)
     if floor is not None and target < floor:

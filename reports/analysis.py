@@ -15,7 +15,7 @@ from cases import get_case
 
 from . import effectivity, metrics
 from .jobs import NOT_AVAILABLE, OK
-from .plan import SOLVERS
+from .plan import series_solvers
 from .references import best_history, published_points
 from .study import CaseRuns
 
@@ -217,7 +217,7 @@ def analyse(cr: CaseRuns) -> CaseAnalysis:
     an = CaseAnalysis(cr, case, cr.truth, reference, errors, {}, pd.DataFrame(), pd.DataFrame())
     family_uncertainty = {f: an.uncertainty_of(f) for f in FAMILIES}
     an.solvers = {s: _solver_summary(s, cr.series.get(s, []), errors, an.truth_uncertainty, family_uncertainty)
-                  for s in SOLVERS if s in cr.series}
+                  for s in series_solvers() if s in cr.series}
     an.orders = pd.DataFrame([row for solver, s in an.solvers.items() for row in _orders(case, solver, s)])
     an.published = pd.DataFrame(_published_rows(case, cr, points))
     an.effectivity = pd.DataFrame(effectivity.rows(case, cr.truth, cr.estimates))

@@ -11,12 +11,12 @@ import pandas as pd
 
 from runs import zones
 from runs.figures import plastic_zones
+from runs.registry import lookup
 
 from . import figures, stability  # noqa: F401  (importing stability registers its section)
 from .analysis import CaseAnalysis, analyse
 from .cache import RunCache
 from .document import render_html, write_pdf
-from .plan import REF2D
 from .sections import ReportContext, build_sections
 from .study import StudyResult, run_study
 from .tables import write_tables
@@ -71,8 +71,8 @@ def case_figures(an: CaseAnalysis, out: Path) -> dict[str, str]:
 
 def _zone_rows(an: CaseAnalysis) -> dict[str, list[dict]]:
     """SMFEM's plastic zones (the fields run) beside the same-dt reference's, where they have them."""
-    runs = {"SMFEM": an.runs.fields, figures.LABEL[REF2D]: an.runs.reference}
-    return {label: zones.load(run.path / "plastic_zones.npz") for label, run in runs.items()
+    return {lookup(run.job.solver).label: zones.load(run.path / "plastic_zones.npz")
+            for run in (an.runs.fields, an.runs.reference)
             if run is not None and run.path is not None and (run.path / "plastic_zones.npz").exists()}
 
 

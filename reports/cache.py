@@ -26,12 +26,12 @@ from pathlib import Path
 import pandas as pd
 
 from cases import get_case
+from runs.registry import lookup
 
 from .jobs import FAILED, NOT_INSTALLED, Job, Outcome
-from .plan import MODAL, SMFEM
 
-#: packages whose source decides a solver's results
-SOURCES = {SMFEM: ("smfem", "cases", "runs"), "reference": ("reference_fem", "cases", "runs")}
+#: packages whose source decides every solver's results (each adds its own, :mod:`runs.registry`)
+SHARED_SOURCES = ("cases", "runs")
 #: modules of those packages that decide nothing in a run's files (they draw, report, or read
 #: finished runs: the error estimate and the --tol search): editing them must not send a report
 #: back to rerunning every solve
@@ -42,7 +42,7 @@ PRESENTATION = {"runs/figures.py", "runs/progress.py", "runs/estimate.py", "runs
 def code_version(solver: str) -> str:
     """sha256 (16 hex digits) of the ``.py`` files of the packages ``solver`` depends on."""
     h = hashlib.sha256()
-    for package in SOURCES[SMFEM if solver == SMFEM else "reference"]:
+    for package in (*lookup(solver).packages, *SHARED_SOURCES):
         root = Path(importlib.util.find_spec(package).submodule_search_locations[0])
         for path in sorted(root.rglob("*.py")):
             if f"{package}/{path.relative_to(root)}" in PRESENTATION:
@@ -72,10 +72,11 @@ class Run:
 
     @property
     def label(self) -> str:
-        """``r2 H40`` (refine, SMFEM harmonics), with ``dt`` when it is not the case's default."""
+        """``r2 H40`` (refine; harmonics where the solver has them), with ``dt`` when it is not
+        the case's default."""
         p = self.summary["params"] if self.summary else self.job.build().params
         default_dt = get_case(self.job.case).params["dt"]
-        text = f"r{p.get('refine', 1)}" + (f" H{p.get('harmonics')}" if self.job.solver in (SMFEM, MODAL) else "")
+        text = f"r{p.get('refine', 1)}" + (f" H{p.get('harmonics')}" if lookup(self.job.solver).harmonics else "")
         text += f" dt{p['dt']:g}" if p.get("dt", default_dt) != default_dt else ""
         return text + "".join(f" {k}" if v is True else f" {k} {v}" for k, v in self.job.options)
 

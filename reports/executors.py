@@ -8,14 +8,17 @@ from __future__ import annotations
 import multiprocessing
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
+from runs.registry import lookup
+
 from .jobs import Job, execute
 
 
 def local(jobs: list[Job], workers: int):
     """Run ``jobs`` on ``workers`` fresh processes (spawned: a forked child would inherit the
-    parent's thread pools); each pins its BLAS threads in :func:`~reports.jobs.execute`."""
+    parent's thread pools); each pins its BLAS threads in :func:`~reports.jobs.execute`. Each
+    job goes with its solver's entry: a solver registered here is not in a fresh process's table."""
     with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = {pool.submit(execute, job): job for job in jobs}
+        futures = {pool.submit(execute, job, lookup(job.solver)): job for job in jobs}
         for future in as_completed(futures):
             yield futures[future], future.result()
 
@@ -34,7 +37,7 @@ def dask(jobs: list[Job], address: str, timeout: str = "20s"):
     except OSError as exc:
         raise SchedulerUnreachable(f"--scheduler {address}: no dask scheduler answers there ({exc})") from None
     with client:
-        futures = {client.submit(execute, job, pure=False): job for job in jobs}
+        futures = {client.submit(execute, job, lookup(job.solver), pure=False): job for job in jobs}
         for future in dask_completed(list(futures)):
             yield futures[future], future.result()
 

@@ -13,18 +13,15 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from runs.figures import place_labels, save  # noqa: E402
+from runs.registry import lookup  # noqa: E402
 
 from .analysis import CaseAnalysis  # noqa: E402
 from .effectivity import BAND  # noqa: E402
 from .metrics import TARGETS, TRUTH_MARGIN, smoothed  # noqa: E402
-from .plan import CALCULIX, REF2D, REF3D, SMFEM  # noqa: E402
 from .references import published_points, theory_curves  # noqa: E402
 
-STYLE = {SMFEM: dict(color="C0", marker="o"), REF2D: dict(color="C1", marker="s"), REF3D: dict(color="C2", marker="^"),
-         CALCULIX: dict(color="C4", marker="D")}
 #: characters per line of a figure's title (a 6.4 in wide figure at 8 pt)
 TITLE_WIDTH = 90
-LABEL = {SMFEM: "SMFEM", REF2D: "reference FEM 2D", REF3D: "reference FEM 3D", CALCULIX: "CalculiX 2D"}
 
 
 def work_precision(an: CaseAnalysis, path: Path) -> Path:
@@ -34,14 +31,15 @@ def work_precision(an: CaseAnalysis, path: Path) -> Path:
     fig, ax = _axes(4.9)
     labels = []
     for solver, s in an.solvers.items():
+        entry = lookup(solver)
         pts = s.points[np.isfinite(s.points.total) & (s.points.total > 0)] if len(s.points) else s.points
         if not len(pts):
-            ax.plot([], [], ls="none", **STYLE[solver], label=f"{LABEL[solver]}: {s.status}")
+            ax.plot([], [], ls="none", **entry.style, label=f"{entry.label}: {s.status}")
             continue
-        ax.plot(pts.cpu, 100 * pts.total, ls="none", alpha=0.35, **STYLE[solver])
+        ax.plot(pts.cpu, 100 * pts.total, ls="none", alpha=0.35, **entry.style)
         front = pts.set_index("label").loc[[lab for lab in s.front if lab in set(pts.label)]]
-        ax.plot(front.cpu, 100 * front.total, **STYLE[solver], label=f"{LABEL[solver]} (front)")
-        labels.append((front.cpu, 100 * front.total, front.index, STYLE[solver]["color"]))
+        ax.plot(front.cpu, 100 * front.total, **entry.style, label=f"{entry.label} (front)")
+        labels.append((front.cpu, 100 * front.total, front.index, entry.color))
     for target in TARGETS:
         ax.axhline(100 * target, color="0.4", ls="--", lw=0.8)
         ax.annotate(f"{100 * target:g} %", (1.0, 100 * target), xycoords=("axes fraction", "data"), xytext=(-24, 2),
@@ -103,8 +101,9 @@ def spatial_precision(an: CaseAnalysis, path: Path) -> Path:
         pts = s.points[np.isfinite(s.points.spatial) & (s.points.spatial > 0)] if len(s.points) else s.points
         if not len(pts):
             continue
-        ax.plot(pts.cpu, 100 * pts.spatial, **STYLE[solver], label=LABEL[solver])
-        labels.append((pts.cpu, 100 * pts.spatial, pts.label, STYLE[solver]["color"]))
+        entry = lookup(solver)
+        ax.plot(pts.cpu, 100 * pts.spatial, **entry.style, label=entry.label)
+        labels.append((pts.cpu, 100 * pts.spatial, pts.label, entry.color))
     ax.set(xlabel="CPU time of the solve, s", ylabel="relative max-norm difference, %")
     if labels:
         _log_axes(ax)
@@ -141,9 +140,9 @@ def histories(an: CaseAnalysis, path: Path) -> Path:
         for solver, runs in an.runs.series.items():
             run = _most_accurate(an, solver, runs)
             if run is not None:
-                h = run.history
-                ax.plot(1e3 * h["t"], seen(h["t"], h[probe]), color=STYLE[solver]["color"], lw=1,
-                        label=f"{LABEL[solver]} {run.label}")
+                h, entry = run.history, lookup(solver)
+                ax.plot(1e3 * h["t"], seen(h["t"], h[probe]), color=entry.color, lw=1,
+                        label=f"{entry.label} {run.label}")
         for pp in (p for p in published_points(an.case) if p.probe == probe):
             t, v = np.array([pt for pt in pp.points if pt[0] <= an.case.t_end]).reshape(-1, 2).T
             ax.plot(1e3 * t, v, "x", color="C3", ms=8, mew=2, label=f"published ({pp.source.split(',')[0]})")
@@ -172,11 +171,12 @@ def effectivity(table, path: Path) -> Path:
     ax.axhspan(*BAND, color="0.85", zorder=0, label=f"honest: {BAND[0]:g} ... {BAND[1]:g}")
     ax.axhline(1.0, color="0.5", lw=0.8)
     for k, solver in enumerate(solvers):
+        entry = lookup(solver)
         for j, (setting, marker) in enumerate(SETTING_MARKER.items()):
             rows = judged[(judged.solver == solver) & (judged.setting == setting)]
             x = [names.index(c) + 0.3 * (k - (len(solvers) - 1) / 2) + 0.07 * (j - 1) for c in rows.case]
-            ax.plot(x, rows.effectivity, ls="none", marker=marker, color=STYLE[solver]["color"], ms=5, mfc="none",
-                    label=f"{LABEL[solver]}, {setting}")
+            ax.plot(x, rows.effectivity, ls="none", marker=marker, color=entry.color, ms=5, mfc="none",
+                    label=f"{entry.label}, {setting}")
     ax.set_xticks(range(len(names)), names, fontsize=7)
     ax.set(yscale="log", ylabel="effectivity (estimate / actual error), -", xlim=(-0.6, len(names) - 0.4))
     lo, hi = ax.get_ylim()
@@ -219,6 +219,6 @@ def verification_orders(table, solver: str, path: Path) -> Path:
                      fontsize=8)
         ax.legend(fontsize=7, title="observed order", title_fontsize=7)
         ax.grid(True, which="both", lw=0.3)
-    fig.suptitle(f"Code verification, {LABEL.get(solver, solver)}: manufactured motions", fontsize=9)
+    fig.suptitle(f"Code verification, {lookup(solver).label}: manufactured motions", fontsize=9)
     fig.tight_layout()
     return save(fig, path)

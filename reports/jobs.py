@@ -16,9 +16,7 @@ from cases import UnsupportedCase, get_case
 from cases.params import ToolMissing
 from runs import threads
 from runs.files import write_run
-from runs.registry import family, solve
-
-from .plan import EXPLICIT, MODAL, REF3D, SMFEM
+from runs.registry import FIELDS, Solver, lookup, solve
 
 OK, NOT_CONVERGED, NOT_AVAILABLE, FAILED = "ok", "not converged", "not available", "failed"
 #: an optional solver whose program is not on this machine (CalculiX): not kept in the cache,
@@ -28,12 +26,12 @@ NOT_INSTALLED = "not installed"
 
 @dataclass(frozen=True)
 class Job:
-    """A case with overrides, run by one solver (``smfem``, ``reference-2d``, ``reference-3d``,
-    ``reference-modal``, ``calculix``).
+    """A case with overrides, run by one solver (a name of :mod:`runs.registry`'s table).
 
-    ``overrides`` is a sorted tuple of ``(key, value)`` so that a job can be hashed; ``fields``
-    asks an SMFEM run for ``fields.vtu`` and its time series ``fields.pvd`` (and plastic zones,
-    which plastic runs always draw); ``options`` (sorted ``(key, value)`` too) are the solver's
+    ``overrides`` is a sorted tuple of ``(key, value)`` so that a job can be hashed, with the
+    ``dim`` the solver fixes; ``fields`` asks a solver that writes fields (SMFEM's, in a study)
+    for ``fields.vtu`` and its time series ``fields.pvd`` (and plastic zones, which plastic runs
+    always draw); ``options`` (sorted ``(key, value)`` too) are the solver's
     own options (:func:`runs.registry.solve`), part of the run's identity.
     """
 
@@ -45,9 +43,10 @@ class Job:
 
     @classmethod
     def make(cls, case: str, solver: str, overrides: dict, fields: bool = False, options: dict | None = None) -> Job:
-        if solver not in (SMFEM, MODAL, EXPLICIT):  # the explicit reference runs at the case's dim
-            overrides = dict(overrides, dim=3 if solver == REF3D else 2)
-        return cls(case, solver, tuple(sorted(overrides.items())), fields and solver == SMFEM,
+        entry = lookup(solver)
+        if entry.dim is not None:  # in the parameters, so the run's record says how it ran
+            overrides = dict(overrides, dim=entry.dim)
+        return cls(case, solver, tuple(sorted(overrides.items())), fields and FIELDS in entry.supports,
                    tuple(sorted((options or {}).items())))
 
     def build(self):
@@ -78,18 +77,20 @@ def series_every(case) -> int:
     return max(1, case.n_steps // SERIES_FRAMES)
 
 
-def execute(job: Job) -> Outcome:
-    """Run ``job`` as ``smfem run`` would and return its files.
+def execute(job: Job, solver: Solver | None = None) -> Outcome:
+    """Run ``job`` as ``smfem run`` would and return its files; ``solver``: the entry of
+    ``job.solver``, sent along to a worker process, whose table has only the built-in ones.
 
     A solver that cannot represent the case (:class:`cases.UnsupportedCase`) gives
     ``not available``; any other exception gives ``failed`` with the traceback's last line, so
     that one broken run does not lose a long study.
     """
     threads.pin()  # a dask worker too: a run's CPU means one core's work wherever it runs
+    solver = solver or lookup(job.solver)
     case = job.build()
     wall0 = time.perf_counter()
     try:
-        result = solve(job.solver, case, fields=job.fields, every=series_every(case) if job.fields else 0,
+        result = solve(solver, case, fields=job.fields, every=series_every(case) if job.fields else 0,
                        options=dict(job.options) or None)
     except ToolMissing as exc:
         return Outcome(NOT_INSTALLED, str(exc))
@@ -102,6 +103,6 @@ def execute(job: Job) -> Outcome:
     with tempfile.TemporaryDirectory(prefix="smfem-job-") as tmp:
         out = Path(tmp)
         # the zones' data only: the report draws the figure it shows (SMFEM beside the reference)
-        write_run(out, case, family(job.solver), result, wall, zone_figure=False)
+        write_run(out, case, solver.family, result, wall, zone_figure=False)
         files = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
     return Outcome(OK if result.converged else NOT_CONVERGED, result.message, files)

@@ -12,11 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from cases import ParameterError, get_case
-from runs.registry import CALCULIX, EXPLICIT, MODAL, REF2D, REF3D, SMFEM
+from runs.registry import CALCULIX, EXPLICIT, MODAL, REF2D, REF3D, REFERENCE, SMFEM, lookup, solvers
 
-#: the solvers a study has series of (the modal solution, ``MODAL``, makes truths only;
-#: CalculiX, optional, one run per case at the case's settings in 2D)
-SOLVERS = (SMFEM, REF2D, REF3D, CALCULIX)
 #: the ``--set`` keys that make a level
 RESOLUTION_KEYS = ("refine", "harmonics", "dt")
 #: time steps of the quick study's 3-D series, as divisors of the case's: twice, once and half
@@ -38,8 +35,14 @@ class Series:
     levels: tuple[dict, ...]
 
     def __post_init__(self):
-        if self.solver not in SOLVERS:
-            raise ValueError(f"solver must be one of {SOLVERS}, not {self.solver!r}")
+        if not lookup(self.solver).series:
+            raise ValueError(f"solver must be one of {series_solvers()}, not {self.solver!r}")
+
+
+def series_solvers() -> tuple[str, ...]:
+    """The solvers a study may have series of, in the table's order (the modal and explicit
+    solutions make truths only; CalculiX, optional, runs once per case at the case's settings)."""
+    return tuple(s.name for s in solvers() if s.series)
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ from .cache import code_version
 from .effectivity import BAND
 from .effectivity import summary as effectivity_summary
 from .metrics import TARGETS, TRUTH_MARGIN
-from .plan import SMFEM
+from .plan import REFERENCE, SMFEM
 from .study import StudyResult
 from .tables import truth_table
 from .verdict import verdict
@@ -98,7 +98,7 @@ def overview(ctx: ReportContext) -> list[Section]:
             f"settings: {ctx.settings}; {len(s.executed)} runs executed, {s.cached} taken from the cache; "
             f"study wall time {s.wall_time_s:.1f} s",
             f"machine: {platform.platform()}, {os.cpu_count()} CPUs, Python {platform.python_version()}",
-            f"code versions (source hashes): smfem {code_version(SMFEM)}, reference {code_version('reference')}",
+            f"code versions (source hashes): smfem {code_version(SMFEM)}, reference {code_version(REFERENCE)}",
             "tables as CSV: tables/*.csv; per-run files (history.csv, summary.json): the run cache",
         ]),
     ]

@@ -9,6 +9,7 @@ from __future__ import annotations
 import pandas as pd
 
 from .cache import code_version
+from .plan import REFERENCE, SMFEM
 from .sections import EXTRA_SECTIONS, Section, items, p, table
 
 #: studies that carry the section (the tests' tiny study does not)
@@ -16,7 +17,7 @@ WITH_STABILITY = ("quick", "full")
 
 
 def stability_rows(cache_dir) -> pd.DataFrame:
-    path = cache_dir / f"stability-{code_version('smfem')}-{code_version('reference')}.csv"
+    path = cache_dir / f"stability-{code_version(SMFEM)}-{code_version(REFERENCE)}.csv"
     if not path.exists():
         from .stability_study import stability_table
 

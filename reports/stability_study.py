@@ -32,6 +32,7 @@ from cases.geometry import Axis, Pressure
 from cases.params import out_of_range
 
 from runs.errors import history_errors
+from runs.registry import REF2D, REF3D, REFERENCE, SMFEM, lookup
 from runs.registry import solve as run_solver
 from smfem.model import Model
 from smfem.newmark import LinearSystem, march
@@ -122,9 +123,10 @@ def _held_at_zero(model: Model) -> Model:
     return model
 
 
-def incompressibility(nus=(0.49, 0.499, 0.4999), p: float = 1e6, reference_dims=(2, 3)) -> list[dict]:
+def incompressibility(nus=(0.49, 0.499, 0.4999), p: float = 1e6, references=(REF2D, REF3D)) -> list[dict]:
     """Relative errors of u_r at r1 (C) and r2 (A) against Lame: SMFEM (paper mesh), SMFEM with
-    the free gradients held at zero, and the reference FEM in 2D and 3D."""
+    the free gradients held at zero, and the reference FEM at the ``dim`` of each of
+    ``references``; a row's keys are the solvers' names."""
     rows = []
     for nu in nus:
         case = internal_pressure(p, nu=nu)
@@ -133,10 +135,10 @@ def incompressibility(nus=(0.49, 0.499, 0.4999), p: float = 1e6, reference_dims=
         def error(values):
             return max(abs(values["A_ur"] / exact[0] - 1), abs(values["C_ur"] / exact[1] - 1))
 
-        row = {"nu": nu, "smfem": error(static_probes(case)),
+        row = {"nu": nu, SMFEM: error(static_probes(case)),
                "smfem_gradients_held": error(static_probes(case, _held_at_zero(Model(case))))}
-        for dim in reference_dims:
-            row[f"reference_{dim}d"] = error(reference_static_probes(internal_pressure(p, nu=nu, dim=dim)))
+        for solver in references:
+            row[solver] = error(reference_static_probes(internal_pressure(p, nu=nu, dim=lookup(solver).dim)))
         rows.append(row)
     return rows
 
@@ -251,7 +253,7 @@ def contrast_sweep(contrasts=(1e-2, 1e-4, 1e-6, 1e-8, 1e-10), t_end: float = 0.0
 
 
 def contact_extremes(v0: float = 500.0, frictions=(0.0, 0.5, 1.0), t_end: float = 1e-4,
-                     solvers=("smfem", "reference")) -> list[dict]:
+                     solvers=(SMFEM, REFERENCE)) -> list[dict]:
     """Rod impact at ``v0`` (100 times the scene's) with Coulomb friction 0 to 1: converged,
     finite, and how far the face went into the wall (SMFEM: layer compression in thicknesses;
     reference: penetration of any node, m)."""
@@ -260,11 +262,11 @@ def contact_extremes(v0: float = 500.0, frictions=(0.0, 0.5, 1.0), t_end: float 
         for f in frictions:
             case = get_case("rod_impact", {"v0": v0, "friction": f, "t_end": t_end})
             r = run_solver(solver, case)
-            into_wall = r.info["max_layer_compression"] if solver == "smfem" else r.info["max_penetration"]
+            into_wall = r.info["max_layer_compression"] if solver == SMFEM else r.info["max_penetration"]
             rows.append({"solver": solver, "v0": v0, "friction": f, "converged": r.converged, "message": r.message,
                          "finite": all(np.isfinite(h).all() for h in r.history.values()),
                          "into_wall": into_wall,
-                         "into_wall_limit": 1.0 if solver == "smfem" else 1e-9})
+                         "into_wall_limit": 1.0 if solver == SMFEM else 1e-9})
     return rows
 
 
@@ -284,7 +286,7 @@ def stability_table() -> list[dict]:
                 f"energy drift over {r['n_steps']} steps", r["energy_drift"], ENERGY_DRIFT_LIMIT,
                 r["finite"] and r["energy_drift"] < ENERGY_DRIFT_LIMIT)
     for r in incompressibility():
-        for solver in ("smfem", "reference_2d", "reference_3d"):
+        for solver in (SMFEM, REF2D, REF3D):
             add("near incompressibility", f"nu = {r['nu']}, {solver}", "u_r error against Lame", r[solver],
                 AGREEMENT_LIMIT, r[solver] < AGREEMENT_LIMIT)
         add("near incompressibility", f"nu = {r['nu']}, smfem, free gradients held at zero (before the fix)",
@@ -313,7 +315,7 @@ def stability_table() -> list[dict]:
             "against 1e-8", r["change_vs_1e-8"], limit,
             r["converged"] and r["finite"] and (limit is None or r["change_vs_1e-8"] < limit))
     for r in contact_extremes():
-        unit = "layer thicknesses" if r["solver"] == "smfem" else "m"
+        unit = "layer thicknesses" if r["solver"] == SMFEM else "m"
         add("contact", f"{r['solver']}, v0 = {r['v0']:g} m/s, friction {r['friction']:g}",
             f"furthest into the wall ({unit})", r["into_wall"], r["into_wall_limit"],
             r["converged"] and r["finite"] and r["into_wall"] < r["into_wall_limit"])

@@ -7,12 +7,13 @@ from dataclasses import dataclass, field
 
 from cases import get_case
 from runs.progress import Progress
+from runs.registry import lookup
 
 from . import effectivity
 from .cache import Run, RunCache
 from .executors import run_jobs
 from .jobs import Job
-from .plan import CALCULIX, REF3D, SMFEM, CaseStudy
+from .plan import SMFEM, CaseStudy
 from .stored import find as find_stored
 from .truth import Truth, assemble, plan_for
 from .truth import jobs as truth_jobs
@@ -81,9 +82,10 @@ def _jobs(study: CaseStudy, stored: bool) -> tuple[dict, Job, Job, dict]:
 
 
 def _cost_order(job: Job) -> tuple:
-    """Longest runs first, so that two workers finish together: 3-D, then finer meshes."""
+    """Longest runs first, so that two workers finish together: the dear solvers' (3-D, an
+    external program), then finer meshes."""
     o = dict(job.overrides)
-    return (job.solver not in (REF3D, CALCULIX), -o.get("refine", 1), -o.get("harmonics", 0))
+    return (not lookup(job.solver).dear, -o.get("refine", 1), -o.get("harmonics", 0))
 
 
 def run_cached(jobs: list[Job], cache: RunCache, scheduler: str | None = None, workers: int = 2,

@@ -48,6 +48,7 @@ from scipy.optimize import brentq
 
 from cases import get_case
 from runs.files import jsonable
+from runs.registry import lookup
 
 from .cache import Run
 from .jobs import OK, Job
@@ -177,7 +178,7 @@ def plan_for(name: str, base: dict, settings: str = "quick") -> TruthPlan:
     if plan.method == TIME_TRUTH:
         plan = replace(plan, solver=solver)
     if plan.method == EXPLICIT_TRUTH:
-        plan = replace(plan, dim=3 if solver == REF3D else 2)
+        plan = replace(plan, dim=lookup(solver).dim)
     return plan
 
 

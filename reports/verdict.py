@@ -12,11 +12,11 @@ import re
 
 import pandas as pd
 
+from runs.registry import lookup
+
 from .metrics import TARGETS, TRUTH_TOO_COARSE
 from .plan import SMFEM
 
-#: how a solver is named in a sentence
-NAMES = {"reference-2d": "the 2D reference", "reference-3d": "the 3D reference", "calculix": "CalculiX"}
 _SPEEDUP = re.compile(r"^([<>]?)\s*([0-9.]+)x$")
 _COST = re.compile(r"^([0-9.e+-]+) \((.*)\)$")
 
@@ -31,7 +31,7 @@ def _comparison(solver: str, speedup: str) -> str | None:
     if not m:
         return None
     bound, x = m.group(1), float(m.group(2))
-    name = NAMES.get(solver, solver)
+    name = lookup(solver).prose
     if x >= 1:
         more = {"<": "at most ", ">": "more than "}.get(bound, "")
         return f"{more}{x:.3g} times faster than {name}"
@@ -64,7 +64,7 @@ def sentence(case: str, rows: pd.DataFrame) -> str:
         return (f"{case}: no claim: the truth's uncertainty ({mine.truth_uncertainty_pct:.2g} %) is too coarse "
                 f"to judge {100 * TARGETS[-1]:g} %.")
     last = TARGETS[-1]
-    better = [f"{NAMES.get(s, s)} in {m.group(1)} s ({m.group(2)})" for s, row in rows.drop(index=SMFEM).iterrows()
+    better = [f"{lookup(s).prose} in {m.group(1)} s ({m.group(2)})" for s, row in rows.drop(index=SMFEM).iterrows()
               if (m := _COST.match(str(row[f"cpu_s_to_{_pct(last)}"])))]
     tail = f"; {' and '.join(better)} reach{'es' if len(better) == 1 else ''} it" if better else "; no other solver does"
     return f"{case}: SMFEM does not reach {100 * last:g} % in this study (best {_best(mine)}){tail}."

@@ -43,11 +43,8 @@ import numpy as np
 from cases import rebuild
 
 from .errors import probe_error
-from .registry import REF2D, REF3D, REFERENCE, SMFEM, solve
+from .registry import lookup, solve, solvers
 
-#: the solvers an estimate is made for: time-stepping on a mesh (the modal truth is exact in
-#: time, the explicit engine sets its own step, CalculiX meshes on its own)
-ESTIMATED = (SMFEM, REFERENCE, REF2D, REF3D)
 #: the order of each part's error in its parameter (h, 1/harmonics, dt) where no third level
 #: observes it: Newmark's average acceleration is second order in dt, both elements second order
 #: in h in the displacements, a patch load's Fourier series second order in the response
@@ -77,11 +74,14 @@ class Companion:
 
 
 def companions(case, solver: str) -> list[Companion]:
-    """The companion runs of ``case`` for ``solver`` (:data:`ESTIMATED` only): the coarse
-    mesh, and on it twice and four times the step and (SMFEM) half and a quarter of the
+    """The companion runs of ``case`` for ``solver`` (an ``estimated`` one of
+    :mod:`runs.registry`, else none: time-stepping on a mesh; the modal truth is exact in time,
+    the explicit engine sets its own step, CalculiX meshes on its own): the coarse mesh, and on
+    it twice and four times the step and (a solver with harmonics) half and a quarter of the
     harmonics, the third levels observing the orders. Both solvers keep the cut-outs' edges as
     grid nodes at any mesh, so the coarse mesh is the same body."""
-    if solver not in ESTIMATED:
+    entry = lookup(solver)
+    if not entry.estimated:
         return []
     coarse = halved(case)
     out = [Companion("space", coarse, "run")]
@@ -89,7 +89,7 @@ def companions(case, solver: str) -> list[Companion]:
         out.append(Companion("time", {**coarse, "dt": 2 * case.dt}, "space"))
     if case.n_steps >= 4:
         out.append(Companion("time2", {**coarse, "dt": 4 * case.dt}, "time"))
-    if solver == SMFEM and not case.axisymmetric and case.harmonics > 1:
+    if entry.harmonics and not case.axisymmetric and case.harmonics > 1:
         out.append(Companion("harmonics", {**coarse, "harmonics": max(1, case.harmonics // 2)}, "space"))
         if case.harmonics >= 4:
             out.append(Companion("harmonics2", {**coarse, "harmonics": case.harmonics // 4}, "harmonics"))
@@ -163,7 +163,8 @@ def estimate(case, solver: str, result, run=solve) -> dict:
     makes a companion's result (the registry's ``solve`` by default)."""
     comps = companions(case, solver)
     if not comps:
-        return {"method": f"none: no estimate for {solver} (it is made for {', '.join(ESTIMATED)})"}
+        made_for = ", ".join(s.name for s in solvers() if s.estimated)
+        return {"method": f"none: no estimate for {solver} (it is made for {made_for})"}
     results, cases, cpu = {"run": result}, {"run": case}, {}
 
     def made(c: Companion) -> bool:

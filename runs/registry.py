@@ -1,4 +1,7 @@
-"""Every solver behind one call: ``solve(solver, case) -> RunResult``.
+"""Every solver behind one call, ``solve(solver, case) -> RunResult``, and the one table that
+declares them: a :class:`Solver` entry per name holds how it runs and everything the other
+layers ask about it (the ``dim`` it fixes, the packages that key its cached runs, what it can
+run, how the report draws it). Adding a solver is one :func:`register` call.
 
 The names are the ones the studies and ``summary.json`` use: ``smfem``, ``reference-2d``,
 ``reference-3d`` (the reference FEM with ``dim`` set), ``reference`` (the reference at the
@@ -11,66 +14,203 @@ Each solver is imported only when it runs, so ``smfem run`` does not load the re
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Callable
 
 from cases.result import RunResult
 
 SMFEM, REFERENCE, REF2D, REF3D, MODAL = "smfem", "reference", "reference-2d", "reference-3d", "reference-modal"
 CALCULIX, EXPLICIT = "calculix", "reference-explicit"
-SOLVERS = (SMFEM, REFERENCE, REF2D, REF3D, MODAL, CALCULIX, EXPLICIT)
-#: the ``dim`` each reference name fixes
-DIMS = {REF2D: 2, REF3D: 3}
+
+#: what a solver can run (:attr:`Solver.supports`): the synthesized 3-D field of the last step
+#: (``fields``), that field every N steps (``frames``, a time series), plasticity, a rigid wall
+#: (``contact``), and body forces, tractions and a material varying along x3 (``forces``)
+FIELDS, FRAMES, PLASTICITY, CONTACT, FORCES = "fields", "frames", "plasticity", "contact", "forces"
+EVERYTHING = frozenset((FIELDS, FRAMES, PLASTICITY, CONTACT, FORCES))
 
 
-def with_dim(solver: str, case):
-    """``case`` with the ``dim`` the solver name fixes (unchanged for the others)."""
-    if solver not in DIMS or case.params.get("dim") == DIMS[solver]:
+@dataclass(frozen=True)
+class Solver:
+    """One entry of the solver table.
+
+    Parameters
+    ----------
+    name : what studies, the cache and the command line call it
+    run : ``run(case, progress=, fields=, every=, options=) -> RunResult``; imports its solver
+        when called, and must be importable by name (a module-level function) where a study's
+        workers run it
+    family : the name ``summary.json`` gives (default ``name``)
+    dim : the reference ``dim`` the name fixes (None: the case's own)
+    packages : the packages whose sources decide its results besides ``cases`` and ``runs``
+        (a change to them reruns its cached runs, :func:`reports.cache.code_version`)
+    supports : of :data:`EVERYTHING`. :func:`solve` refuses ``forces`` where it is missing (the
+        solver would ignore them); plasticity and contact each solver refuses itself, with its
+        own reason (``tests/test_registry.py`` holds the table to it)
+    label, color, marker : its name in a figure and how its points are drawn
+    prose : how a sentence of the report names it (default ``label``)
+    harmonics : its discretization has a number of harmonics (shown in a run's label; the
+        error estimate halves it)
+    estimated : a run's error estimate is made from its companions (:mod:`runs.estimate`): a
+        time-stepping solver on a mesh that ``refine`` and ``coarsen`` set
+    command_line : offered by ``smfem run --solver``
+    series : a study may run a series of it (not: the truth engines, and ``reference``,
+        whose ``dim`` a study fixes by name)
+    dear : its runs are a study's longest (3-D, an external program): started first
+    """
+
+    name: str
+    run: Callable[..., RunResult]
+    family: str = ""
+    dim: int | None = None
+    packages: tuple[str, ...] = ("reference_fem",)
+    supports: frozenset = EVERYTHING
+    label: str = ""
+    color: str = "0.45"
+    marker: str = "x"
+    prose: str = ""
+    harmonics: bool = False
+    estimated: bool = False
+    command_line: bool = True
+    series: bool = True
+    dear: bool = False
+
+    def __post_init__(self):
+        if not self.supports <= EVERYTHING:
+            unknown = sorted(self.supports - EVERYTHING)
+            raise ValueError(f"{self.name}: supports {unknown}: not one of {sorted(EVERYTHING)}")
+        # defaults that depend on other fields (frozen: set once, here)
+        object.__setattr__(self, "family", self.family or self.name)
+        object.__setattr__(self, "label", self.label or self.name)
+        object.__setattr__(self, "prose", self.prose or self.label)
+
+    @property
+    def style(self) -> dict:
+        """matplotlib's keyword arguments of its points."""
+        return {"color": self.color, "marker": self.marker}
+
+
+_TABLE: dict[str, Solver] = {}
+
+
+def register(entry: Solver) -> Solver:
+    """Add ``entry`` to the table (a name already there is an error)."""
+    if entry.name in _TABLE:
+        raise ValueError(f"solver {entry.name!r} is registered already")
+    _TABLE[entry.name] = entry
+    return entry
+
+
+def unregister(name: str) -> None:
+    """Take ``name`` out of the table (a test's solver, after the test)."""
+    del _TABLE[lookup(name).name]
+
+
+def lookup(name: str) -> Solver:
+    """The entry of ``name``; a ValueError naming the registered solvers otherwise."""
+    try:
+        return _TABLE[name]
+    except KeyError:
+        raise ValueError(f"unknown solver {name!r}: choose one of {', '.join(_TABLE)}") from None
+
+
+def solvers() -> tuple[Solver, ...]:
+    """Every entry, in the order registered (the order of a report's rows and legends)."""
+    return tuple(_TABLE.values())
+
+
+def _entry(solver: str | Solver) -> Solver:
+    return solver if isinstance(solver, Solver) else lookup(solver)
+
+
+def with_dim(solver: str | Solver, case):
+    """``case`` with the ``dim`` the solver fixes (unchanged for the others)."""
+    dim = _entry(solver).dim
+    if dim is None or case.params.get("dim") == dim:
         return case
     from cases import rebuild
 
-    return rebuild(case, {"dim": DIMS[solver]})
+    return rebuild(case, {"dim": dim})
 
 
-def solve(solver: str, case, progress: Callable[[int, int], None] | None = None,
-          fields: bool = False, options=None, every: int = 0) -> RunResult:
-    """Run ``case`` with ``solver``; ``fields``: keep the synthesized 3-D field of the last
-    step in ``result.mesh`` (else None); ``every``: also the field every that many steps in
-    ``result.frames`` (SMFEM and the reference FEM); ``options``: SMFEM's
-    :class:`smfem.options.SolverOptions` (or a dict of its fields); for the reference FEM a
-    dict of keyword arguments of its ``solve`` (``grading``; the explicit one also
-    ``step_divisor``)."""
-    if solver not in SOLVERS:
-        raise ValueError(f"unknown solver {solver!r}: choose one of {', '.join(SOLVERS)}")
-    case = with_dim(solver, case)
-    if solver in (MODAL, CALCULIX, EXPLICIT) and (case.forces or case.variation):
-        from cases import UnsupportedCase
-
-        raise UnsupportedCase(f"{case.name}: body forces and a material varying along x3 are solved by smfem and the "
-                              f"reference FEM so far, not by {solver}")
-    if solver == SMFEM:
-        from smfem.options import SolverOptions
-        from smfem.solver import solve as smfem
-
-        options = SolverOptions(**options) if isinstance(options, dict) else options
-        return smfem(case, options, progress=progress, with_fields=fields, every=every)
-    if solver == MODAL:
-        from reference_fem.modal import solve as modal
-
-        return modal(case, progress=progress)
-    if solver == CALCULIX:
-        from reference_fem.calculix import solve as calculix
-
-        return calculix(case, progress=progress)
-    if solver == EXPLICIT:
-        from reference_fem.explicit import solve as reference
-    else:
-        from reference_fem import solve as reference
-    result = reference(case, progress=progress, every=every, **(options or {}))
-    return result if fields else replace(result, mesh=None)
+def named_for(solver: str, case) -> str:
+    """The name of the entry that runs ``case`` as ``solver`` does with its ``dim`` fixed
+    (``reference`` at dim 3: ``reference-3d``; ``solver`` where no entry of its family fixes it)."""
+    entry = lookup(solver)
+    if entry.dim is not None:
+        return entry.name
+    dim = case.params.get("dim", 2)
+    return next((s.name for s in _TABLE.values() if s.family == entry.family and s.dim == dim), entry.name)
 
 
 def family(solver: str) -> str:
     """``smfem``, ``reference``, ``reference-modal``, ``reference-explicit`` or ``calculix``: the
     name a run's ``summary.json`` gives."""
-    return REFERENCE if solver in (REF2D, REF3D) else solver
+    return lookup(solver).family
+
+
+def solve(solver: str | Solver, case, progress: Callable[[int, int], None] | None = None,
+          fields: bool = False, options=None, every: int = 0) -> RunResult:
+    """Run ``case`` with ``solver`` (a name, or its entry); ``fields``: keep the synthesized 3-D
+    field of the last step in ``result.mesh`` (else None); ``every``: also the field every that
+    many steps in ``result.frames`` (where the solver supports ``frames``); ``options``: SMFEM's
+    :class:`smfem.options.SolverOptions` (or a dict of its fields); for the reference FEM a
+    dict of keyword arguments of its ``solve`` (``grading``; the explicit one also
+    ``step_divisor``)."""
+    entry = _entry(solver)
+    case = with_dim(entry, case)
+    if FORCES not in entry.supports and (case.forces or case.variation):
+        from cases import UnsupportedCase
+
+        raise UnsupportedCase(f"{case.name}: body forces and a material varying along x3 are solved by smfem and the "
+                              f"reference FEM so far, not by {entry.name}")
+    result = entry.run(case, progress=progress, fields=fields, every=every, options=options)
+    return result if fields or result.mesh is None else replace(result, mesh=None)
+
+
+# -- how each solver runs: its module imported only then ---------------------------------------
+def _smfem(case, progress, fields, every, options) -> RunResult:
+    from smfem.options import SolverOptions
+    from smfem.solver import solve as smfem
+
+    options = SolverOptions(**options) if isinstance(options, dict) else options
+    return smfem(case, options, progress=progress, with_fields=fields, every=every)
+
+
+def _reference(case, progress, fields, every, options) -> RunResult:
+    from reference_fem import solve as reference
+
+    return reference(case, progress=progress, every=every, **(options or {}))
+
+
+def _explicit(case, progress, fields, every, options) -> RunResult:
+    from reference_fem.explicit import solve as explicit
+
+    return explicit(case, progress=progress, every=every, **(options or {}))
+
+
+def _modal(case, progress, fields, every, options) -> RunResult:
+    from reference_fem.modal import solve as modal
+
+    return modal(case, progress=progress)
+
+
+def _calculix(case, progress, fields, every, options) -> RunResult:
+    from reference_fem.calculix import solve as calculix
+
+    return calculix(case, progress=progress)
+
+
+_ON_A_MESH = dict(run=_reference, family=REFERENCE, estimated=True)  # the reference FEM, by dim
+register(Solver(SMFEM, _smfem, packages=("smfem",), label="SMFEM", color="C0", marker="o", harmonics=True,
+                estimated=True))
+register(Solver(REFERENCE, **_ON_A_MESH, label="reference FEM", color="C1", marker="s", series=False))
+register(Solver(REF2D, **_ON_A_MESH, dim=2, label="reference FEM 2D", color="C1", marker="s",
+                prose="the 2D reference", command_line=False))
+register(Solver(REF3D, **_ON_A_MESH, dim=3, label="reference FEM 3D", color="C2", marker="^",
+                prose="the 3D reference", command_line=False, dear=True))
+register(Solver(MODAL, _modal, supports=frozenset(), label="reference FEM, harmonic model", color="C5", marker="v",
+                harmonics=True, command_line=False, series=False))
+register(Solver(CALCULIX, _calculix, supports=frozenset((PLASTICITY,)), label="CalculiX 2D", color="C4", marker="D",
+                prose="CalculiX", dear=True))
+register(Solver(EXPLICIT, _explicit, supports=EVERYTHING - {FORCES}, label="reference FEM, explicit", color="C6",
+                marker="P", series=False))

@@ -11,6 +11,7 @@ import pytest
 from cases import get_case
 from reports import stability_study as study
 from reports.stability_study import AGREEMENT_LIMIT, ENERGY_DRIFT_LIMIT
+from runs.registry import REF2D, REF3D, SMFEM
 
 
 def assert_conservative(rows):
@@ -67,7 +68,7 @@ def test_near_incompressible_lame_within_two_percent(incompressible):
     stiffens like 1 / (1 - 2 nu), still far inside 2 %)."""
     assert [r["nu"] for r in incompressible] == [0.49, 0.499, 0.4999]
     for r in incompressible:
-        for solver in ("smfem", "reference_2d", "reference_3d"):
+        for solver in (SMFEM, REF2D, REF3D):
             assert r[solver] < AGREEMENT_LIMIT, (r["nu"], solver, r[solver])
     smfem = [r["smfem"] for r in incompressible]
     assert max(smfem) < 0.001 and max(smfem) - min(smfem) < 5e-5  # no trend towards nu = 1/2

@@ -1,0 +1,97 @@
+"""The solver table (:mod:`runs.registry`) is the one place a solver is declared: a toy solver
+registered there is offered by the command line and runs through a study into its tables and
+figures; the built-in entries keep the report's styles and tell the truth about what they
+refuse."""
+
+from __future__ import annotations
+
+import json
+
+import matplotlib.pyplot as plt
+import pandas as pd
+import pytest
+
+from cases import UnsupportedCase, get_case, rebuild
+from cli import main
+from reports import figures
+from reports.build import build
+from reports.plan import MODAL_TRUTH, REF2D, SMFEM, CaseStudy, Series, TruthPlan
+from runs import registry
+from runs.registry import CALCULIX, CONTACT, PLASTICITY, REF3D, REFERENCE, Solver, lookup, solvers
+
+COARSE = "reference-coarse"
+
+
+def reference_at_refine_1(case, **how):
+    """The toy solver: the reference FEM on the paper mesh whatever ``refine`` the case asks for
+    (module level: a study's worker processes import it by name)."""
+    return registry.solve(REFERENCE, rebuild(case, {"refine": 1}), **how)
+
+
+@pytest.fixture
+def coarse():
+    """The toy solver in the table for one test, and out of it afterwards."""
+    entry = registry.register(Solver(COARSE, reference_at_refine_1, family=REFERENCE, dim=2,
+                                     label="reference FEM, paper mesh", color="C9", marker="*"))
+    yield entry
+    registry.unregister(COARSE)
+
+
+def test_a_registered_solver_is_offered_by_smfem_run_and_runs(coarse, tmp_path):
+    out = tmp_path / "run"
+    assert main(["run", "dome", "--solver", COARSE, "--out", str(out), "--quiet", "--set", "t_end=4e-5"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["solver"] == REFERENCE and summary["converged"]
+
+
+def test_a_registered_solver_runs_through_a_study_into_its_tables_and_figures(coarse, tmp_path, monkeypatch):
+    study = (CaseStudy("dome", (Series(SMFEM, ({},)), Series(COARSE, ({},))), reference=(REF2D, {"refine": 2}),
+                       truth=TruthPlan(MODAL_TRUTH, refine=(1, 2)), base={"t_end": 4e-5}),)
+    report = build(study, tmp_path / "report", workers=2, progress=False, settings="tiny", document=False)
+    for table in ("runs", "errors", "headline"):
+        rows = pd.read_csv(tmp_path / "report" / "tables" / f"{table}.csv")
+        assert (rows.solver == COARSE).any(), table
+    runs = pd.read_csv(tmp_path / "report" / "tables" / "runs.csv")
+    assert (runs[runs.solver == COARSE].status == "ok").all()
+    assert (tmp_path / "report" / "figures" / "dome-work-precision.png").exists()
+    kept = []
+    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig))
+    figures.work_precision(report.analyses[0], tmp_path / "wp.png")
+    front = [line for ax in kept[0].axes for line in ax.get_lines() if line.get_label() == f"{coarse.label} (front)"]
+    assert len(front) == 1 and (front[0].get_color(), front[0].get_marker()) == (coarse.color, coarse.marker)
+
+
+def test_the_toy_solver_is_gone_after_its_test():
+    assert COARSE not in [s.name for s in solvers()]
+    with pytest.raises(ValueError, match=f"unknown solver '{COARSE}': choose one of smfem, reference"):
+        lookup(COARSE)
+    with pytest.raises(ValueError, match="unknown solver"):
+        Series(COARSE, ({},))
+
+
+def test_a_name_is_registered_once():
+    with pytest.raises(ValueError, match="registered already"):
+        registry.register(Solver(SMFEM, reference_at_refine_1))
+
+
+def test_the_table_keeps_the_reports_styles_labels_and_choices():
+    """Today's figures: the four solvers of a study drawn as before the table."""
+    drawn = {s.name: (s.color, s.marker, s.label) for s in solvers() if s.series}
+    assert drawn == {SMFEM: ("C0", "o", "SMFEM"), REF2D: ("C1", "s", "reference FEM 2D"),
+                     REF3D: ("C2", "^", "reference FEM 3D"), CALCULIX: ("C4", "D", "CalculiX 2D")}
+    assert [s.name for s in solvers() if s.command_line] == [SMFEM, REFERENCE, CALCULIX, "reference-explicit"]
+    assert {s.name: s.dim for s in solvers() if s.dim} == {REF2D: 2, REF3D: 3}
+
+
+@pytest.mark.parametrize("feature,case", [(PLASTICITY, ("dome", {"plastic": True})), (CONTACT, ("rod_impact", {}))])
+def test_a_solver_without_a_feature_refuses_a_case_that_needs_it(feature, case, monkeypatch):
+    """The table's word against the solvers' own refusals (CalculiX refuses before it would
+    start ccx, so it need not be installed)."""
+    import reference_fem.calculix.solver
+
+    monkeypatch.setattr(reference_fem.calculix.solver, "find_ccx", lambda: "ccx")
+    lacking = [s for s in solvers() if feature not in s.supports]
+    assert lacking
+    for entry in lacking:
+        with pytest.raises(UnsupportedCase):
+            registry.solve(entry.name, get_case(*case))
