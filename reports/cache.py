@@ -26,6 +26,8 @@ from pathlib import Path
 import pandas as pd
 
 from cases import get_case
+from cases.result import RunResult
+from runs.files import read_run
 from runs.registry import lookup
 
 from .jobs import FAILED, NOT_INSTALLED, Job, Outcome
@@ -61,14 +63,21 @@ def key_of(job: Job) -> dict:
 
 @dataclass
 class Run:
-    """A finished (or refused) run as the report reads it."""
+    """A finished (or refused) run as the report reads it: the :class:`RunResult` its solver
+    returned, read back from the cache (:func:`runs.files.read_run`; the fields stay on disk at
+    ``path``), and its summary.json."""
 
     job: Job
     status: str
     message: str
     path: Path | None
-    history: pd.DataFrame | None = None
+    result: RunResult | None = None
     summary: dict | None = None
+
+    @functools.cached_property
+    def history(self) -> pd.DataFrame | None:
+        """``t`` and every probe, one row per time (None without a result)."""
+        return None if self.result is None else pd.DataFrame({"t": self.result.t, **self.result.history})
 
     @property
     def label(self) -> str:
@@ -155,6 +164,7 @@ def _damage(path: Path) -> str:
 
 
 def _read(job: Job, status: str, message: str, path: Path) -> Run:
-    history = pd.read_csv(path / "history.csv") if (path / "history.csv").exists() else None
+    if (path / "history.csv").exists():
+        return Run(job, status, message, path, *read_run(path, fields=False))
     summary = json.loads((path / "summary.json").read_text()) if (path / "summary.json").exists() else None
-    return Run(job, status, message, path, history, summary)
+    return Run(job, status, message, path, None, summary)

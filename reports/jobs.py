@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import functools
 import tempfile
 import time
 import traceback
@@ -50,7 +51,12 @@ class Job:
                    tuple(sorted((options or {}).items())))
 
     def build(self):
-        """The case with the resolved parameters (raises ParameterError on a bad override)."""
+        """The case with the resolved parameters (raises ParameterError on a bad override),
+        resolved once per job: the cache's key, the run's label and the worker all ask."""
+        return self.resolved
+
+    @functools.cached_property
+    def resolved(self):
         return get_case(self.case, dict(self.overrides))
 
     def describe(self) -> str:

@@ -93,12 +93,12 @@ def write_run(out: Path, case, solver: str, result, wall_time_s: float, zone_fig
     return written
 
 
-def read_run(path: Path) -> tuple[RunResult, dict]:
+def read_run(path: Path, fields: bool = True) -> tuple[RunResult, dict]:
     """The :class:`RunResult` that :func:`write_run` took, read back from its directory, and the
     summary.json beside it: the histories (to the 10 significant digits history.csv keeps), the
     per-step iterations, the facts, the last field (fields.vtu), the time series (fields.pvd) and
-    the plastic zones (plastic_zones.npz). ``info`` is as JSON holds it (a non-finite number
-    as its string)."""
+    the plastic zones (plastic_zones.npz); without ``fields`` the meshes stay on disk (a study
+    reads hundreds of runs). ``info`` is as JSON holds it (a non-finite number as its string)."""
     path = Path(path)
     table = pd.read_csv(path / "history.csv")
     written = json.loads((path / "summary.json").read_text())
@@ -106,7 +106,7 @@ def read_run(path: Path) -> tuple[RunResult, dict]:
     if written.get("harmonics_used") is not None:
         info["harmonics_used"] = written["harmonics_used"]
     frames = []
-    if (path / "fields.pvd").exists():
+    if fields and (path / "fields.pvd").exists():
         import xml.etree.ElementTree as ET
 
         for entry in ET.parse(path / "fields.pvd").iter("DataSet"):
@@ -121,6 +121,6 @@ def read_run(path: Path) -> tuple[RunResult, dict]:
         n_dof=int(written["n_dof"]), iterations=list((written.get("iterations") or {}).get("per_step", [])),
         converged=bool(written["converged"]), message=written.get("message", ""),
         cpu_time_s=float(written["cpu_time_s"]),
-        mesh=meshio.read(path / "fields.vtu") if (path / "fields.vtu").exists() else None,
+        mesh=meshio.read(path / "fields.vtu") if fields and (path / "fields.vtu").exists() else None,
         info=info, snapshots=snapshots, frames=frames)
     return result, written

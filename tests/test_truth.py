@@ -13,6 +13,7 @@ import scipy.sparse.linalg as sla
 
 from cases import get_case
 from cases.analytic import lame_cylinder
+from cases.result import RunResult
 from helpers import thick_cylinder_internal_pressure
 from reference_fem import modal, static
 from reference_fem.harmonic import HarmonicModel
@@ -285,8 +286,8 @@ def _synthetic_runs(name: str, plan: TruthPlan, base: dict, history):
         params = job.build().params
         t = np.arange(int(round(case.t_end / params["dt"])) + 1) * params["dt"]
         values = {p: history(t, params["dt"], params["refine"]) for p in case.probe_names}
-        runs[role] = Run(job, "ok", "", None, pd.DataFrame({"t": t, **values}),
-                         {"params": params, "cpu_time_s": 1.0, "n_dof": 1, "info": {}})
+        result = RunResult(t, values, n_dof=1, iterations=[1] * (len(t) - 1), cpu_time_s=1.0)
+        runs[role] = Run(job, "ok", "", None, result, {"params": params, "cpu_time_s": 1.0, "n_dof": 1, "info": {}})
     return runs
 
 
