@@ -114,19 +114,18 @@ class CutoutWoodbury:
         B = np.concatenate([Ba, Bb], axis=3)  # (ne, ng, 6, 2 d): on (U_e, U'_e)
         k = np.einsum("eg,egri,rs,egsj->eij", ops.sample_weights, B, model.D, B, optimize=True)
         k[:, np.arange(d), np.arange(d)] += a0 * model.rho * np.repeat(ops.node_volume, DOFS_PER_NODE, axis=1)  # lumped mass on U
-        # scatter each element's (U_e, U'_e) into the cut-out dofs' (U, U')
-        where = {d: i for i, d in enumerate(dofs)}
+        # scatter each element's (U_e, U'_e) into the cut-out dofs' (U, U'), (f - 1)-weighted per
+        # point: H_q = sum_e excess[e, q] k_e, one sparse product over all elements
         n = len(dofs)
         local = element_dofs(model.mesh.elements[live])
-        index = np.array([[where.get(d, -1) for d in row] for row in local])
+        position = np.searchsorted(dofs, local)
+        index = np.where(dofs[np.minimum(position, n - 1)] == local, position, -1)  # dofs no mode carries: -1
         index = np.concatenate([index, np.where(index >= 0, index + n, -1)], axis=1)  # (ne, 2 d)
-        H = np.zeros((excess.shape[1], 2 * n, 2 * n))
-        for e in range(len(live)):
-            ok = index[e] >= 0
-            block = k[e][np.ix_(ok, ok)]
-            at = index[e][ok]
-            H[:, at[:, None], at[None, :]] += excess[e][:, None, None] * block[None]
-        return H
+        ok = (index[:, :, None] >= 0) & (index[:, None, :] >= 0)
+        flat = (index[:, :, None] * (2 * n) + index[:, None, :])[ok]
+        owner = np.broadcast_to(np.arange(len(live))[:, None, None], ok.shape)[ok]
+        scatter = sp.csr_matrix((k[ok], (flat, owner)), shape=((2 * n) ** 2, len(live)))
+        return (scatter @ excess).T.reshape(-1, 2 * n, 2 * n)
 
     def _V(self, x: np.ndarray) -> np.ndarray:
         """``V x`` (nq, rank) of stacked amplitudes."""
