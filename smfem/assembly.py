@@ -5,12 +5,18 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from .elements import DOFS_PER_NODE
 from .fourier import ROW_TYPE
 
 
+def node_dofs(nodes: np.ndarray) -> np.ndarray:
+    """(*nodes.shape, 3) global dofs of nodes: ``3 node + component``."""
+    return DOFS_PER_NODE * nodes[..., None] + np.arange(DOFS_PER_NODE)
+
+
 def element_dofs(elements: np.ndarray) -> np.ndarray:
-    """(n_elements, 12) global dofs, node-major ``3 node + component``."""
-    return (3 * elements[:, :, None] + np.arange(3)).reshape(len(elements), 12)
+    """(n_elements, dofs per element) global dofs, node-major."""
+    return node_dofs(elements).reshape(len(elements), -1)
 
 
 def weighted_elasticity(D: np.ndarray, integrals: np.ndarray) -> np.ndarray:
@@ -31,21 +37,23 @@ def weighted_elasticity(D: np.ndarray, integrals: np.ndarray) -> np.ndarray:
 
 
 def assemble(blocks: np.ndarray, elements: np.ndarray, n_nodes: int) -> sp.csr_matrix:
-    """Sum element blocks (n, 12, 12) into a (3 n_nodes, 3 n_nodes) CSR matrix."""
+    """Sum element blocks (n, d, d) into a (3 n_nodes, 3 n_nodes) CSR matrix."""
     dofs = element_dofs(elements)
-    rows = np.repeat(dofs, 12, axis=1).ravel()
-    cols = np.tile(dofs, (1, 12)).ravel()
-    n = 3 * n_nodes
+    d = dofs.shape[1]
+    rows = np.repeat(dofs, d, axis=1).ravel()
+    cols = np.tile(dofs, (1, d)).ravel()
+    n = DOFS_PER_NODE * n_nodes
     return sp.csr_matrix((blocks.ravel(), (rows, cols)), shape=(n, n))
 
 
-def lumped_mass(sqrt_g: np.ndarray, rho_integrals: np.ndarray, elements: np.ndarray, n_nodes: int) -> np.ndarray:
-    """Diagonal of the lumped mass (paper (6)): a quarter of each element's mass to each node.
+def lumped_mass(node_volume: np.ndarray, rho_integrals: np.ndarray, elements: np.ndarray, n_nodes: int) -> np.ndarray:
+    """Diagonal of the lumped mass (paper (6)): each node's share ``node_volume`` (n, nodes) of
+    its element's mass (the moment scheme: a quarter).
 
     ``rho_integrals`` (n, 2) holds ``int rho psi1^2`` and ``int rho psi3^2`` per element; the
     in-plane components take the first, the x3 component the second. Returns (3 n_nodes,).
     """
-    per_node = 0.25 * sqrt_g[:, None] * rho_integrals[:, [0, 0, 1]]  # (n, 3)
-    m = np.zeros((n_nodes, 3))
-    np.add.at(m, elements, per_node[:, None, :])
+    per_node = node_volume[:, :, None] * rho_integrals[:, None, [0, 0, 1]]  # (n, nodes, 3)
+    m = np.zeros((n_nodes, DOFS_PER_NODE))
+    np.add.at(m, elements, per_node)
     return m.ravel()

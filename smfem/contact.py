@@ -47,12 +47,12 @@ import scipy.sparse as sp
 from cases.geometry import RING
 
 from . import element, fourier
+from .element import GAUSS_A
 from .fourier import Mode
 from .linalg import factorize_spd
 from .model import ModelError
 from .newmark import Constants, State, StepFailed
 from .options import SolverOptions
-from .sampling import GAUSS_A
 
 OPEN, STICK, SLIP = 0, 1, 2
 NORMAL = 1  # strain row e22: normal to the layer

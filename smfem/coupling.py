@@ -17,7 +17,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import fourier
-from .sampling import ROWS, element_scatter, gauss_operators
+from .assembly import node_dofs
+from .elements import DOFS_PER_NODE
+from .sampling import ROWS, element_scatter, sample_operators
 
 
 def cutout_points(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -43,42 +45,43 @@ class StackedOperator:
         x3, w, excess = cutout_points(model)
         psi = np.array([fourier.psi(s.mode, x3, model.body, model.length) for s in S])  # (n_modes, 2, nq)
         self.psi, self.psi_t = psi.transpose(1, 0, 2).copy(), psi.transpose(1, 2, 0).copy()  # per row type
-        # stiffness: D B and B' at the Gauss points of the cut-out elements, weights per point
-        B = gauss_operators(model, live)  # (n_modes, ne, 4, 6, 12)
-        self.DB = (model.D @ B).reshape(-1, 24, 12)
-        self.Bt = B.reshape(-1, 24, 12).transpose(0, 2, 1).copy()
+        # stiffness: D B and B' at the section sample points of the cut-out elements, weights per point
+        B = sample_operators(model, live)  # (n_modes, ne, ng, 6, d)
+        ng, d = B.shape[2], B.shape[4]
+        self.DB = (model.D @ B).reshape(-1, ng * 6, d)
+        self.Bt = B.reshape(-1, ng * 6, d).transpose(0, 2, 1).copy()
         self.G = element_scatter(model, live)
         self.Gt = self.G.T.tocsr()
-        self.k_weight = np.repeat((0.25 * model.ops.sqrt_g[live])[:, None] * excess * w, 4, axis=0)  # (ne * 4, nq)
-        # mass: a quarter of each cut-out element's (f - 1) rho to each of its nodes
+        self.k_weight = (model.ops.sample_weights[live][:, :, None] * excess[:, None, :] * w).reshape(-1, len(x3))  # (ne * ng, nq)
+        # mass: each cut-out element's (f - 1) rho to its nodes, by their shares
         nodes, where = np.unique(model.mesh.elements[live], return_inverse=True)
-        share = 0.25 * model.rho * model.ops.sqrt_g[live][:, None] * excess * w  # (ne, nq)
+        share = model.rho * model.ops.node_volume[live][:, :, None] * excess[:, None, :] * w  # (ne, nodes, nq)
         m_weight = np.zeros((len(nodes), len(x3)))
-        np.add.at(m_weight, where.reshape(-1, 4), share[:, None, :])
-        self.m_weight = np.repeat(m_weight, 3, axis=0)  # per node dof
-        component = np.tile(np.arange(3), len(nodes))
+        np.add.at(m_weight, where.reshape(len(live), -1), share)
+        self.m_weight = np.repeat(m_weight, DOFS_PER_NODE, axis=0)  # per node dof
+        component = np.tile(np.arange(DOFS_PER_NODE), len(nodes))
         self.dofs_of_type = (np.flatnonzero(component < 2), np.flatnonzero(component == 2))
-        dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
+        dofs = node_dofs(nodes).ravel()
         self.H = sp.block_diag([s.T.T[:, dofs] for s in S], format="csr")  # node dofs -> stacked
         self.Ht = self.H.T.tocsr()
-        self.cut = (len(S), len(live), len(nodes))
+        self.cut = (len(S), len(live) * ng, len(nodes))
 
     def K(self, x: np.ndarray) -> np.ndarray:
         if self.cut is None:
             return self.K_h @ x
-        n_modes, ne, _ = self.cut
-        a = (self.DB @ (self.Gt @ x).reshape(-1, 12, 1)).reshape(n_modes, ne * 4, 6).transpose(2, 1, 0)  # D B x, rows first
+        n_modes, n_points, _ = self.cut
+        a = (self.DB @ (self.Gt @ x).reshape(len(self.DB), -1, 1)).reshape(n_modes, n_points, 6).transpose(2, 1, 0)  # D B x, rows first
         back = np.empty_like(a)
         for t, rows in enumerate(ROWS):
             back[rows] = ((a[rows] @ self.psi[t]) * self.k_weight) @ self.psi_t[t]
-        per_gauss = back.transpose(2, 1, 0).reshape(-1, 24, 1)
-        return self.K_h @ x + self.G @ (self.Bt @ per_gauss).ravel()
+        per_point = back.transpose(2, 1, 0).reshape(len(self.Bt), -1, 1)
+        return self.K_h @ x + self.G @ (self.Bt @ per_point).ravel()
 
     def M(self, x: np.ndarray) -> np.ndarray:
         if self.cut is None:
             return self.M_h * x
         n_modes, _, n_nodes = self.cut
-        u = (self.Ht @ x).reshape(n_modes, n_nodes * 3).T  # (node dofs, modes)
+        u = (self.Ht @ x).reshape(n_modes, n_nodes * DOFS_PER_NODE).T  # (node dofs, modes)
         back = np.empty_like(u)
         for t, dofs in enumerate(self.dofs_of_type):  # in-plane components go as psi1, the x3 one as psi3
             back[dofs] = ((u[dofs] @ self.psi[t]) * self.m_weight[dofs]) @ self.psi_t[t]

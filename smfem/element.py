@@ -1,4 +1,5 @@
-"""Ring and prismatic 4-node elements of the moment scheme (MSFE), batched over elements.
+"""Ring and prismatic 4-node elements of the moment scheme (MSFE), batched over elements:
+the default element of :mod:`smfem.elements` (``moment4``).
 
 Strain rows are ``[e11, e22, e33, g12, g13, g23]`` (engineering shears) in the element's local
 frame: ``t1`` along the element's first local coordinate at its centre, ``t2`` normal to it in
@@ -40,6 +41,11 @@ NODE_T = np.array([-1.0, -1.0, 1.0, 1.0])
 ROWS_VARY_XI = np.array([0, 1, 1, 0, 0, 1], bool)
 ROWS_VARY_ETA = np.array([1, 0, 1, 0, 1, 0], bool)
 _STEP = 1e-30  # complex step: no subtractive cancellation, so any tiny step is exact
+#: the 2 x 2 Gauss points (+-a, +-a), counter-clockwise: the stress sample points. Because
+#: a^2 = 1/12, the mean over them of B' D B, B = B0 + xi B1 + eta B2, is the stiffness below
+GAUSS_A = 0.5 / np.sqrt(3.0)
+GAUSS_XI = GAUSS_A * np.array([-1.0, 1.0, 1.0, -1.0])
+GAUSS_ETA = GAUSS_A * np.array([-1.0, -1.0, 1.0, 1.0])
 
 
 def shape_functions(xi, eta):
@@ -47,6 +53,18 @@ def shape_functions(xi, eta):
     xi, eta = np.asarray(xi)[..., None], np.asarray(eta)[..., None]
     a, b = NODE_S * xi + 0.5, NODE_T * eta + 0.5
     return a * b, NODE_S * b, a * NODE_T
+
+
+def gauss_interpolation(xi: float, eta: float) -> np.ndarray:
+    """(4,) weights of the values at the Gauss points that interpolate them bilinearly at ``(xi, eta)``."""
+    return (1 + GAUSS_XI * xi / GAUSS_A**2) * (1 + GAUSS_ETA * eta / GAUSS_A**2) / 4
+
+
+def at_gauss_points(parts) -> np.ndarray:
+    """The moment-scheme strain operator ``B0 + xi B1 + eta B2`` (each (ne, 6, 12)) at the four
+    Gauss points: (ne, 4, 6, 12)."""
+    B0, B1, B2 = parts
+    return B0[:, None] + GAUSS_XI[None, :, None, None] * B1[:, None] + GAUSS_ETA[None, :, None, None] * B2[:, None]
 
 
 @dataclass(frozen=True)
@@ -84,6 +102,30 @@ class ElementOperators:
         dropped and free rows included."""
         A = self.at(0.0)
         return A, tuple(one - zero for one, zero in zip(self.at(1.0), A))
+
+    # -- smfem.elements.Operators --------------------------------------------------------------
+    @property
+    def node_volume(self) -> np.ndarray:
+        """(n, 4): a quarter of the element to each node (paper (6))."""
+        return np.repeat((0.25 * self.sqrt_g)[:, None], 4, axis=1)
+
+    @property
+    def sample_weights(self) -> np.ndarray:
+        """(n, 4): a quarter of the element to each Gauss point."""
+        return self.node_volume
+
+    def strain(self, p: float, xi, eta) -> np.ndarray:
+        B0, B1, B2 = self.at(p)
+        return B0 + xi * B1 + eta * B2
+
+    def at_samples(self, p: float) -> np.ndarray:
+        return at_gauss_points(self.at(p))
+
+    def sample_linear_parts(self) -> tuple[np.ndarray, np.ndarray]:
+        return tuple(at_gauss_points(parts) for parts in self.linear_parts())
+
+    def stiffness(self, p: float, D: np.ndarray, q: float | None = None) -> np.ndarray:
+        return element_stiffness(self, p, D, q)
 
 
 def local_frame(X: np.ndarray) -> np.ndarray:

@@ -1,7 +1,7 @@
 """The error against a known exact motion (``Case.exact``): the relative L2 norm over the body.
 
 Code verification's global measure: the displacement the amplitudes synthesize, with the
-element's bilinear shape functions, against the exact field, integrated by 3 x 3 Gauss points
+element's shape functions, against the exact field, integrated by 3 x 3 Gauss points
 per element and along x3 by Gauss-Legendre (prism) or the trapezoidal rule around the ring
 (exact for its harmonics). A global norm converges at the element's order (2) on any mesh;
 a single point's value may superconverge before it does.
@@ -16,7 +16,7 @@ import numpy as np
 from cases.geometry import RING
 from cases.manufactured import numeric, time_function
 
-from . import element, fourier
+from . import fourier
 
 X3_POINTS = 64
 
@@ -26,8 +26,8 @@ def error_l2(model, u_modes: list[np.ndarray], motion, t: float) -> float:
     g, w = np.polynomial.legendre.leggauss(3)
     xi, eta = np.meshgrid(g / 2, g / 2, indexing="ij")
     wg = np.outer(w, w).ravel() / 4
-    N, dxi, deta = element.shape_functions(xi.ravel(), eta.ravel())  # (9, 4)
-    X = model.mesh.element_x()  # (ne, 4, 2)
+    N, dxi, deta = model.element.shape_functions(xi.ravel(), eta.ravel())  # (9, nodes)
+    X = model.mesh.element_x()  # (ne, nodes, 2)
     x = np.einsum("gi,eia->ega", N, X)
     J = np.einsum("gi,eia->ega", dxi, X)[..., :, None] * [1, 0] + np.einsum("gi,eia->ega", deta, X)[..., :, None] * [0, 1]
     area = np.abs(np.linalg.det(J)) * wg  # (ne, 9)
@@ -42,7 +42,7 @@ def error_l2(model, u_modes: list[np.ndarray], motion, t: float) -> float:
     u = np.zeros((len(x3),) + area.shape + (3,))
     dofs = model.mesh.elements
     for s, amp in zip(model.systems, u_modes):
-        nodal = (s.T @ amp).reshape(-1, 3)[dofs]  # (ne, 4, 3), section axes and x3
+        nodal = (s.T @ amp).reshape(-1, 3)[dofs]  # (ne, nodes, 3), section axes and x3
         at = np.einsum("gi,eic->egc", N, nodal)
         psi1, psi3 = fourier.psi(s.mode, x3, model.body, model.length)
         u += np.einsum("k,egc->kegc", psi1, at * [1, 1, 0]) + np.einsum("k,egc->kegc", psi3, at * [0, 0, 1])

@@ -24,8 +24,8 @@ def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: 
 
     Ring: ``n_x3`` sectors around the axis (default 72); prism: ``n_x3`` slices along the span
     (default 60). Cartesian axes as in :mod:`cases.geometry`. With ``peps`` (the plastic strain
-    at the sample points, (n_elements, 4, n_x3_points), at ``peps_x3`` along x3) each cell also
-    carries the element's mean over its Gauss points at the x3 point nearest to the cell's middle.
+    at the sample points, (n_elements, section points, n_x3_points), at ``peps_x3`` along x3) each cell
+    also carries the element's mean over its section points at the x3 point nearest to the cell's middle.
     ``solid`` (cell data, 0/1) is 0 in the cut-outs, whose fictitious material the field carries.
     """
     mesh, body = model.mesh, model.body
@@ -84,7 +84,7 @@ def _elastic_stress(model, amplitudes: list[np.ndarray], x3: np.ndarray) -> np.n
     dofs = element_dofs(mesh.elements)
     out = np.zeros((len(x3), mesh.n_elements, 6))
     for s, amp in zip(model.systems, amplitudes):
-        B0 = model.ops.at(fourier.wavenumber(s.mode, body, model.length))[0]  # (ne, 6, 12)
+        B0 = model.ops.strain(fourier.wavenumber(s.mode, body, model.length), 0.0, 0.0)  # (ne, 6, d)
         a = np.einsum("rs,esk,ek->er", model.D, B0, (s.T @ amp)[dofs], optimize=True)
         psi1, psi3 = fourier.psi(s.mode, x3, body, model.length)
         out += np.where(fourier.ROW_TYPE == 0, psi1[:, None], psi3[:, None])[:, None, :] * a[None]

@@ -157,7 +157,7 @@ class BlockIterative:
     @property
     def peps(self) -> np.ndarray:
         """Plastic strain intensity sqrt(2/3 eps_p : eps_p) at the points over the whole x3
-        range (:attr:`peps_x3`), (ne, 4, n)."""
+        range (:attr:`peps_x3`), (ne, section points, n)."""
         return self.points.unfolded(intensity(self.state.eps_p.T).reshape(self.points.point_shape[1:]))[1]
 
     @property

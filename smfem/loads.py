@@ -6,7 +6,7 @@ import numpy as np
 
 from cases.geometry import PRISM, RING, interval_fourier
 
-from .element import shape_functions
+from .elements import Element
 from .fourier import Mode, psi_integrals, psi_squared_integrals
 from .fourier import psi as psi_values
 from .mesh import SectionMesh
@@ -77,11 +77,11 @@ def velocity_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode
 SECTION_POINTS = 3
 
 
-def force_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> list[dict[Mode, np.ndarray]]:
+def force_amplitudes(case, mesh: SectionMesh, modes: list[Mode], element: Element) -> list[dict[Mode, np.ndarray]]:
     """Per force term of the case, the nodal load amplitude (3 n_nodes,) of every mode:
     ``int int f(x) N_i psi(x3) dA dx3`` over the section (a body force) or ``ds dx3`` along its
     edge (a traction); a ring's area element carries r. Gauss-Legendre quadrature over each
-    element or edge segment and along x3."""
+    element (``element``'s shape functions) or edge segment and along x3."""
     from cases.manufactured import numeric
 
     if not case.forces:
@@ -93,7 +93,7 @@ def force_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> list[dict[Mo
     psi = {m: psi_values(m, x3, case.body, case.length) for m in modes}
     out = []
     for term in case.forces:
-        x, weight, N, nodes = _section_points(mesh, case.body) if term.edge is None else _edge_points(mesh, case.body, term.edge)
+        x, weight, N, nodes = _section_points(mesh, case.body, element) if term.edge is None else _edge_points(mesh, case.body, term.edge)
         f = [numeric(c)(x[..., 0, None], x[..., 1, None], x3[None, None, :], 0.0) for c in term.pattern]  # (n, ng, n3)
         amps = {}
         for m in modes:
@@ -106,14 +106,14 @@ def force_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> list[dict[Mo
     return out
 
 
-def _section_points(mesh: SectionMesh, body: str):
+def _section_points(mesh: SectionMesh, body: str, element: Element):
     """Quadrature over every element: points (ne, ng, 2), weights (ne, ng; a ring's times r),
-    shape functions (ng, 4) and the elements' nodes."""
+    shape functions (ng, nodes) and the elements' nodes."""
     g, gw = np.polynomial.legendre.leggauss(SECTION_POINTS)
     xi, eta = np.meshgrid(0.5 * g, 0.5 * g, indexing="ij")
     w2 = np.outer(0.5 * gw, 0.5 * gw).ravel()
-    N, dxi, deta = shape_functions(xi.ravel(), eta.ravel())  # (ng, 4)
-    X = mesh.element_x()  # (ne, 4, 2)
+    N, dxi, deta = element.shape_functions(xi.ravel(), eta.ravel())  # (ng, nodes)
+    X = mesh.element_x()  # (ne, nodes, 2)
     x = np.einsum("ga,ead->egd", N, X)
     jac = np.abs(np.einsum("ga,ea->eg", dxi, X[..., 0]) * np.einsum("ga,ea->eg", deta, X[..., 1])
                  - np.einsum("ga,ea->eg", deta, X[..., 0]) * np.einsum("ga,ea->eg", dxi, X[..., 1]))

@@ -19,7 +19,7 @@ import scipy.sparse as sp
 from cases.geometry import RING
 from cases.params import UnsupportedCase
 
-from . import assembly, constraints, element, fourier, inhomogeneity, loads, symmetry
+from . import assembly, constraints, elements, fourier, inhomogeneity, loads, symmetry
 from .constitutive import isotropic_D
 from .mesh import SectionMesh, section_mesh
 
@@ -54,18 +54,23 @@ class Model:
     ----------
     nonlinear : keep every mode the symmetry of the problem allows (plasticity couples them) and
         set up the x3 sample points for stresses
+    element : the section element, a name in :data:`smfem.elements.ELEMENTS`
 
     The off-diagonal stiffness blocks are assembled only on request
     (:meth:`coupled_stiffness`): a direct solve needs them, the block-iterative solver
     takes the coupling from the stresses instead.
     """
 
-    def __init__(self, case, nonlinear: bool = False):
+    def __init__(self, case, nonlinear: bool = False, element: str = elements.MOMENT4.name):
         self.case = case
         self.body = case.body
         self.length = case.length
         self.mesh: SectionMesh = section_mesh(case.section, case.mesh_scale, case.cutout_edges)
-        self.ops = element.operators(self.mesh.element_x(), case.body, case.material.nu)
+        self.element = elements.get(element)
+        if self.mesh.elements.shape[1] != self.element.nodes:
+            raise ModelError(f"{case.name}: element {element!r} has {self.element.nodes} nodes, the section mesh's "
+                             f"elements {self.mesh.elements.shape[1]}")
+        self.ops: elements.Operators = self.element.operators(self.mesh.element_x(), case.body, case.material.nu)
         mat = case.material
         self.D = isotropic_D(mat.E, mat.nu)
         self.rho = mat.rho
@@ -75,7 +80,7 @@ class Model:
         candidates = fourier.modes(case.body, n_harm, families)
         Q = loads.load_amplitudes(case, self.mesh, candidates)
         V = loads.velocity_amplitudes(case, self.mesh, candidates)
-        terms = loads.force_amplitudes(case, self.mesh, candidates)
+        terms = loads.force_amplitudes(case, self.mesh, candidates, self.element)
         size = {m: max([np.abs(Q[m]).max(), np.abs(V[m]).max()] + [np.abs(F[m]).max() for F in terms])
                 for m in candidates}
         scale = max(size.values())
@@ -174,14 +179,14 @@ class Model:
     def _coupled_mass(self) -> sp.csr_matrix:
         """The off-diagonal lumped mass blocks ``rho(lm)`` of every coupled pair, as one matrix:
         a lumped mass is diagonal on the full dofs, so each block maps each cut-out node's dofs,
-        which get a quarter of each of their cut-out elements' ``rho(lm)`` (elsewhere it is 0)."""
+        which get their share of each of their cut-out elements' ``rho(lm)`` (elsewhere it is 0)."""
         if not self.coupling:
             return self._assemble_pairs(None, None)
         live = self.cutout_elements
         nodes, where = np.unique(self.mesh.elements[live], return_inverse=True)
         share = np.zeros((len(nodes), len(live)))
-        np.add.at(share, (where.reshape(-1, 4), np.arange(len(live))[:, None]), 0.25 * self.rho * self.ops.sqrt_g[live][:, None])
-        dofs = (3 * nodes[:, None] + np.arange(3)).reshape(-1, 1)  # (n_dofs, 1): a 1 x 1 block per dof
+        np.add.at(share, (where.reshape(live.size, -1), np.arange(len(live))[:, None]), self.rho * self.ops.node_volume[live])
+        dofs = assembly.node_dofs(nodes).reshape(-1, 1)  # (n_dofs, 1): a 1 x 1 block per dof
 
         def blocks(pairs):
             I = self._I[pairs[:, 0], pairs[:, 1]][:, self._profile[live]]  # (P, ne, 2, 2)
@@ -192,23 +197,23 @@ class Model:
 
     def coupled_nonzeros(self) -> int:
         """Nonzeros of the whole coupled stiffness, bounded before assembling it: an
-        off-diagonal block has at most 144 entries per element where its x3 integral is not
+        off-diagonal block has at most (element dofs)^2 entries per element where its x3 integral is not
         zero (the cut-outs'), and at most the pattern of its row's diagonal block."""
         diagonal = sum(s.K.nnz for s in self.systems)
         if not self.coupling:
             return diagonal
         n = len(self.systems)
-        nonzero = np.abs(self._I).reshape(n, n, self._I.shape[2], 4).max(axis=3) > 0  # (i, j, profile)
+        nonzero = np.abs(self._I).reshape(n, n, self._I.shape[2], -1).max(axis=3) > 0  # (i, j, profile)
         live = nonzero @ np.bincount(self._profile, minlength=self._I.shape[2])  # elements per pair
         pi, pj = np.array(self.coupling).T
         nnz = np.array([s.K.nnz for s in self.systems])
-        return int(np.minimum(nnz[pi], 144 * live[pi, pj]).sum()) + diagonal
+        return int(np.minimum(nnz[pi], self.element.dofs**2 * live[pi, pj]).sum()) + diagonal
 
     def coupled_stiffness(self) -> sp.csr_matrix:
         """The off-diagonal stiffness blocks ``K(lm)``, l != m, of every coupled pair, as one
         matrix on the stacked reduced amplitudes, assembled over the cut-out elements only
-        (elsewhere different harmonics do not couple). With ``B(p) = Ba + p Bb`` (each of the
-        moment scheme's three parts) and
+        (elsewhere different harmonics do not couple). With ``B(p) = Ba + p Bb`` at the element's
+        sample points (which integrate its stiffness exactly) and
         ``D(lm) = sum_ab I_ab(lm) D_ab``, every element block is a combination of a few fixed
         element matrices, ``K_lm = sum_n c_n(l, m) C_n``: one matrix product per element for
         all pairs."""
@@ -217,7 +222,8 @@ class Model:
         live = self.cutout_elements
         ops = self.ops.subset(live)
         p = np.array([fourier.wavenumber(m, self.body, self.length) for m in self.modes])
-        Ba, Bb = ops.linear_parts()
+        Ba, Bb = ops.sample_linear_parts()  # (ne, ng, 6, d)
+        weights = ops.sample_weights
         C, terms = [], []
         for a in (0, 1):
             for b in (0, 1):
@@ -225,17 +231,16 @@ class Model:
                 if not D.any():
                     continue
                 for left, right, powers in ((Ba, Ba, (0, 0)), (Bb, Ba, (1, 0)), (Ba, Bb, (0, 1)), (Bb, Bb, (1, 1))):
-                    k = sum(w * np.einsum("eri,rs,esj->eij", L, D, R, optimize=True)
-                            for w, L, R in zip((1.0, 1 / 12, 1 / 12), left, right))
-                    C.append(k * ops.sqrt_g[:, None, None])
+                    C.append(np.einsum("eg,egri,rs,egsj->eij", weights, left, D, right, optimize=True))
                     terms.append((a, b) + powers)
-        C = np.stack(C, axis=1).reshape(len(live), len(terms), 144)
+        d = self.element.dofs
+        C = np.stack(C, axis=1).reshape(len(live), len(terms), d * d)
 
         def blocks(pairs):
             pi, pj = pairs.T
             I = self._I[pi, pj][:, self._profile[live]]  # (P, ne, 2, 2)
             coef = np.stack([I[:, :, a, b] * (p[pi] ** u * p[pj] ** v)[:, None] for a, b, u, v in terms], axis=-1)
-            return (coef.transpose(1, 0, 2) @ C).transpose(1, 0, 2).reshape(len(pairs), len(live), 12, 12)
+            return (coef.transpose(1, 0, 2) @ C).transpose(1, 0, 2).reshape(len(pairs), len(live), d, d)
 
         return self._assemble_pairs(blocks, self._reduced_maps(assembly.element_dofs(self.mesh.elements[live])))
 
@@ -270,13 +275,13 @@ class Model:
         """Unconstrained stiffness block (3 n_nodes square) of active mode ``i`` with itself."""
         Dw = assembly.weighted_elasticity(self.D, self.integrals(i, i, homogeneous=homogeneous))
         p = fourier.wavenumber(self.modes[i], self.body, self.length)
-        return assembly.assemble(element.element_stiffness(self.ops, p, Dw), self.mesh.elements, self.mesh.n_nodes)
+        return assembly.assemble(self.ops.stiffness(p, Dw), self.mesh.elements, self.mesh.n_nodes)
 
     def full_mass(self, i: int, j: int, homogeneous: bool = False) -> np.ndarray:
         """Unconstrained lumped mass diagonal (3 n_nodes,) of block ``(i, j)``."""
         I = self.integrals(i, j, homogeneous=homogeneous)
         rho_int = self.rho * np.stack([I[:, 0, 0], I[:, 1, 1]], axis=1)
-        return assembly.lumped_mass(self.ops.sqrt_g, rho_int, self.mesh.elements, self.mesh.n_nodes)
+        return assembly.lumped_mass(self.ops.node_volume, rho_int, self.mesh.elements, self.mesh.n_nodes)
 
     @cached_property
     def homogeneous_blocks(self) -> list[tuple[sp.csr_matrix, np.ndarray]]:

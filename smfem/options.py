@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from . import elements
+
 
 @dataclass(frozen=True)
 class SolverOptions:
@@ -43,6 +45,8 @@ class SolverOptions:
         (2 integrate the products of harmonics exactly; the edge of a contact zone needs more,
         benchmarks/README.md)
     max_state_iterations : contact-layer state iterations allowed per step
+    element : the section element, a name in :data:`smfem.elements.ELEMENTS` (the default: the
+        paper's moment-scheme quadrilateral)
     """
 
     iteration_matrix: str = "auto"
@@ -55,6 +59,7 @@ class SolverOptions:
     x3_min_points: int = 256
     layer_points_per_harmonic: int = 8
     max_state_iterations: int = 60
+    element: str = elements.MOMENT4.name
 
     def tolerance_for(self, case) -> float:
         return self.tolerance if self.tolerance is not None else case.params["tol"]
@@ -62,5 +67,6 @@ class SolverOptions:
     def __post_init__(self):
         if self.iteration_matrix not in ("auto", "coupled", "matrix-free", "sor"):
             raise ValueError(f"iteration_matrix={self.iteration_matrix!r}: 'auto', 'coupled', 'matrix-free' or 'sor'")
+        elements.get(self.element)  # a name that is not in the table fails here, not mid-run
         if self.x3_oversampling < 1.0:
             raise ValueError(f"x3_oversampling={self.x3_oversampling}: at least 1 (fewer points are not exact)")

@@ -9,17 +9,18 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from . import element, fourier
+from . import fourier
+from .assembly import element_dofs
+from .elements import Element
 from .mesh import SectionMesh
 from .model import ModelError
-from .sampling import GAUSS_A, GAUSS_ETA, GAUSS_XI
 
 
-def locate(mesh: SectionMesh, point) -> tuple[int, float, float]:
+def locate(mesh: SectionMesh, element: Element, point) -> tuple[int, float, float]:
     """Element and local coordinates ``(xi, eta)`` in [-1/2, 1/2] of a section point.
 
-    Newton inversion of every element's bilinear map at once; the element whose local
-    coordinates lie inside (or least outside) is chosen.
+    Newton inversion of every element's map (``element``'s shape functions) at once; the
+    element whose local coordinates lie inside (or least outside) is chosen.
     """
     X = mesh.element_x()
     p = np.asarray(point, float)
@@ -57,7 +58,8 @@ def stress_component_weights(R: np.ndarray, comp) -> np.ndarray:
 class PlasticStrainProbes:
     """Equivalent plastic strain probes from the sample points (Gauss points x the points ``x3``).
 
-    A point probe interpolates bilinearly between the element's four Gauss points and linearly
+    A point probe interpolates between the element's section points (the moment scheme: bilinearly
+    between its four Gauss points) and linearly
     between the two nearest x3 points; ``max`` is the maximum over every sample point.
     """
 
@@ -69,8 +71,8 @@ class PlasticStrainProbes:
             if p.kind == "max":
                 self.targets.append(None)
                 continue
-            e, xi, eta = locate(model.mesh, p.point[:2])
-            wg = (1 + GAUSS_XI * xi / GAUSS_A**2) * (1 + GAUSS_ETA * eta / GAUSS_A**2) / 4
+            e, xi, eta = locate(model.mesh, model.element, p.point[:2])
+            wg = model.element.sample_interpolation(xi, eta)
             ring = model.body == "ring"
             x = p.point[2] % period if ring else p.point[2]
             # around a ring the points wrap: the neighbours of theta = 0 are the last and first
@@ -81,7 +83,7 @@ class PlasticStrainProbes:
             self.targets.append((e, wg, k, lam))
 
     def evaluate(self, peps: np.ndarray) -> np.ndarray:
-        """Probe values from the plastic strain at the points (n_elements, 4, n_x3)."""
+        """Probe values from the plastic strain at the points (n_elements, section points, n_x3)."""
         out = []
         for target in self.targets:
             if target is None:
@@ -111,20 +113,19 @@ class ProbeSet:
         m = self.model
         if probe.kind != "point" or probe.field not in ("u", "v", "sigma"):
             raise ValueError(f"probe {probe.name!r} ({probe.kind} {probe.field}) is not available in the linear solver")
-        e, xi, eta = locate(m.mesh, probe.point[:2])
-        dofs = (3 * m.mesh.elements[e][:, None] + np.arange(3)).ravel()
+        e, xi, eta = locate(m.mesh, m.element, probe.point[:2])
+        dofs = element_dofs(m.mesh.elements[[e]])[0]
         out = []
         for s in m.systems:
             psi1, psi3 = fourier.psi(s.mode, probe.point[2], m.body, m.length)
             row = np.zeros(3 * m.mesh.n_nodes)
             if probe.field in ("u", "v"):
-                N, _, _ = element.shape_functions(xi, eta)
+                N, _, _ = m.element.shape_functions(xi, eta)
                 c = probe.component[0] - 1
                 row[dofs[c::3]] = N * (psi1 if c < 2 else psi3)
             else:
                 p = fourier.wavenumber(s.mode, m.body, m.length)
-                B0, B1, B2 = (b[e] for b in m.ops.at(p))
-                eps = (B0 + xi * B1 + eta * B2) * np.where(fourier.ROW_TYPE == 0, psi1, psi3)[:, None]
+                eps = m.ops.subset([e]).strain(p, xi, eta)[0] * np.where(fourier.ROW_TYPE == 0, psi1, psi3)[:, None]
                 w = stress_component_weights(m.ops.rotation[e], probe.component)
                 row[dofs] = w @ m.D @ eps
             out.append(row)

@@ -1,17 +1,16 @@
 """Stress sample points of the nonlinear solver: strain synthesis and internal forces.
 
-Stresses live at the 2 x 2 Gauss points ``(+-a, +-a)``, ``a = 1 / (2 sqrt 3)``, of each
-element's moment-scheme strain field ``B0 + xi B1 + eta B2`` (only the retained linear terms),
-times Gauss-Legendre points along x3 on the pieces between cut-out edges. Because
-``a^2 = 1/12``, the average over the four points of ``B_g' D B_g`` is exactly the moment-scheme
-stiffness, and the x3 rule integrates the products of the kept modes exactly, so the internal
+Stresses live at the element's sample points in the section (the moment scheme: its 2 x 2
+Gauss points, :mod:`smfem.element`) times Gauss-Legendre points along x3 on the pieces between
+cut-out edges. The section points integrate the element's stiffness exactly
+(:mod:`smfem.elements`) and the x3 rule the products of the kept modes, so the internal
 forces of an elastic state are ``K u`` with the exact coupling: the plastic strains then can
 only soften what ``K`` holds, and the iterations converge.
 
 The points cover only the fundamental domain of the modes' symmetry along x3 (prism, odd
 harmonics only: half the span; ring, harmonics that are multiples of n, cosine family only:
 0 ... pi / n), each weighted for all its images: the plastic state repeats there. Point arrays
-are shaped ``(6, n_elements, 4, n_x3)``: stress rows first, x3 last.
+are shaped ``(6, n_elements, n_section_points, n_x3)``: stress rows first, x3 last.
 """
 
 from __future__ import annotations
@@ -24,32 +23,22 @@ import scipy.sparse as sp
 
 from . import fourier, inhomogeneity
 from .assembly import element_dofs
-
-GAUSS_A = 0.5 / np.sqrt(3.0)
-GAUSS_XI = GAUSS_A * np.array([-1.0, 1.0, 1.0, -1.0])
-GAUSS_ETA = GAUSS_A * np.array([-1.0, -1.0, 1.0, 1.0])
+from .elements import DOFS_PER_NODE
 #: stress rows by basis type along x3 (0: psi1, 1: psi3)
 ROWS = (np.flatnonzero(fourier.ROW_TYPE == 0), np.flatnonzero(fourier.ROW_TYPE == 1))
 
 
-def at_gauss_points(parts) -> np.ndarray:
-    """The moment-scheme strain operator ``B0 + xi B1 + eta B2`` (each (ne, 6, 12)) at the four
-    Gauss points: (ne, 4, 6, 12)."""
-    B0, B1, B2 = parts
-    return B0[:, None] + GAUSS_XI[None, :, None, None] * B1[:, None] + GAUSS_ETA[None, :, None, None] * B2[:, None]
-
-
-def gauss_operators(model, elements: np.ndarray | slice = slice(None)) -> np.ndarray:
-    """``B`` of every mode at the four Gauss points of ``elements``: (n_modes, ne, 4, 6, 12)."""
+def sample_operators(model, elements: np.ndarray | slice = slice(None)) -> np.ndarray:
+    """``B`` of every mode at the sample points of ``elements``: (n_modes, ne, ng, 6, d)."""
     ops = model.ops.subset(np.arange(model.mesh.n_elements)[elements])
-    return np.stack([at_gauss_points(ops.at(fourier.wavenumber(s.mode, model.body, model.length))) for s in model.systems])
+    return np.stack([ops.at_samples(fourier.wavenumber(s.mode, model.body, model.length)) for s in model.systems])
 
 
 def element_scatter(model, elements: np.ndarray | slice = slice(None)) -> sp.csr_matrix:
-    """The sparse map from per-mode element-dof values (n_modes, ne, 12), raveled, to the
+    """The sparse map from per-mode element-dof values (n_modes, ne, d), raveled, to the
     stacked reduced amplitudes; its transpose gathers the element dofs of every mode."""
     dofs = element_dofs(model.mesh.elements[elements])
-    n_full = 3 * model.mesh.n_nodes
+    n_full = DOFS_PER_NODE * model.mesh.n_nodes
     scatter = sp.csr_matrix((np.ones(dofs.size), (dofs.ravel(), np.arange(dofs.size))), shape=(n_full, dofs.size))
     return sp.block_diag([s.T.T @ scatter for s in model.systems], format="csr")
 
@@ -137,15 +126,16 @@ class SamplePoints:
         psi = np.array([fourier.psi(s.mode, self.x3, model.body, model.length) for s in model.systems])
         self.psi = psi.transpose(1, 0, 2).copy()  # (2, n_modes, n_x3): synthesis per row type
         self.psi_w = (psi * self.w).transpose(1, 2, 0).copy()  # (2, n_x3, n_modes): weighted projection
-        B = gauss_operators(model)  # (n_modes, ne, 4, 6, 12)
-        self.shape = B.shape[:2]
-        n_modes, ne = self.shape
-        # D B for the stresses of the amplitudes; B' weighted by the element's share for the forces
-        self.DB = (model.D @ B).reshape(n_modes * ne, 24, 12)
-        self.Bt = (B * (0.25 * model.ops.sqrt_g)[None, :, None, None, None]).reshape(n_modes * ne, 24, 12).transpose(0, 2, 1).copy()
+        B = sample_operators(model)  # (n_modes, ne, ng, 6, d)
+        self.shape = B.shape[:3]
+        n_modes, ne, ng = self.shape
+        d = B.shape[-1]
+        # D B for the stresses of the amplitudes; B' weighted by the point's volume for the forces
+        self.DB = (model.D @ B).reshape(n_modes * ne, ng * 6, d)
+        self.Bt = (B * model.ops.sample_weights[None, :, :, None, None]).reshape(n_modes * ne, ng * 6, d).transpose(0, 2, 1).copy()
         self.G = element_scatter(model)
         self.Gt = self.G.T.tocsr()
-        self.point_shape = (6, ne, 4, len(self.x3))
+        self.point_shape = (6, ne, ng, len(self.x3))
 
     def unfolded(self, values: np.ndarray, rows: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """The points over the whole period and a point array (..., n_x3) on them; ``rows``:
@@ -158,13 +148,13 @@ class SamplePoints:
         return full, out
 
     def amplitudes(self, u: np.ndarray) -> np.ndarray:
-        """``D B u`` of stacked amplitudes at the Gauss points, rows first: (6, ne * 4, n_modes)."""
-        n_modes, ne = self.shape
-        a = (self.DB @ (self.Gt @ u).reshape(n_modes * ne, 12, 1)).reshape(n_modes, ne * 4, 6)
+        """``D B u`` of stacked amplitudes at the section points, rows first: (6, ne * ng, n_modes)."""
+        n_modes, ne, ng = self.shape
+        a = (self.DB @ (self.Gt @ u).reshape(n_modes * ne, -1, 1)).reshape(n_modes, ne * ng, 6)
         return a.transpose(2, 1, 0)
 
     def stress(self, u: np.ndarray) -> np.ndarray:
-        """Elastic stresses (6, ne, 4, n_x3) of stacked amplitudes ``u``."""
+        """Elastic stresses (6, ne, ng, n_x3) of stacked amplitudes ``u``."""
         a = self.amplitudes(u)
         out = np.empty((6, a.shape[1], len(self.x3)))
         for t, rows in enumerate(ROWS):
@@ -173,10 +163,10 @@ class SamplePoints:
 
     def forces(self, sigma: np.ndarray) -> np.ndarray:
         """Internal force amplitudes (14) of all modes, stacked, of stresses at the points."""
-        n_modes, ne = self.shape
-        projected = np.empty((6, ne * 4, n_modes))
-        rows_of = sigma.reshape(6, ne * 4, -1)
+        n_modes, ne, ng = self.shape
+        projected = np.empty((6, ne * ng, n_modes))
+        rows_of = sigma.reshape(6, ne * ng, -1)
         for t, rows in enumerate(ROWS):
             projected[rows] = rows_of[rows] @ self.psi_w[t]
-        per_gauss = projected.transpose(2, 1, 0).reshape(n_modes * ne, 24, 1)  # (mode and element, 4 x 6)
-        return self.G @ (self.Bt @ per_gauss).ravel()
+        per_point = projected.transpose(2, 1, 0).reshape(n_modes * ne, ng * 6, 1)  # (mode and element, ng x 6)
+        return self.G @ (self.Bt @ per_point).ravel()

@@ -24,15 +24,16 @@ import scipy.linalg as la
 import scipy.sparse as sp
 
 from . import fourier
-from .linalg import factorize_spd
+from .assembly import element_dofs, node_dofs
 from .coupling import cutout_points
-from .sampling import at_gauss_points
+from .elements import DOFS_PER_NODE
+from .linalg import factorize_spd
 
 
 def cutout_dofs(model) -> np.ndarray:
     """Full dofs of the cut-out elements' nodes that some mode carries."""
     nodes = np.unique(model.mesh.elements[model.cutout_elements])
-    dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
+    dofs = node_dofs(nodes).ravel()
     carried = np.zeros(len(dofs), bool)
     for s in model.systems:
         carried |= np.asarray(abs(s.T[dofs]).sum(axis=1)).ravel() > 0
@@ -57,7 +58,7 @@ class CutoutWoodbury:
         x3, w, excess = cutout_points(model)
         dofs = cutout_dofs(model)
         n_dof = len(dofs)
-        comp_type = (dofs % 3 == 2).astype(int)  # in-plane components go as psi1, the x3 one as psi3
+        comp_type = (dofs % DOFS_PER_NODE == 2).astype(int)  # in-plane components go as psi1, the x3 one as psi3
         # basis values and x3 derivatives per mode, point and dof: d/dx psi(p x) = p psi(p x + pi / 2)
         p = np.array([fourier.wavenumber(s.mode, model.body, model.length) for s in S])
         value = np.array([fourier.psi(s.mode, x3, model.body, model.length) for s in S])  # (modes, 2, nq)
@@ -97,34 +98,34 @@ class CutoutWoodbury:
     @staticmethod
     def _energies(model, a0, dofs, comp_type, excess):
         """``H_q`` (nq, 2 n, 2 n) on ``(U, U')`` of the cut-out dofs: the (f - 1)-weighted
-        moment-scheme stiffness, ``Ba U + Bb' U'`` at the four Gauss points, and lumped mass."""
+        element stiffness, ``Ba U + Bb' U'`` at the element's sample points, and lumped mass."""
         live = model.cutout_elements
         ops = model.ops.subset(live)
-        Ba, Bb = (at_gauss_points(parts) for parts in ops.linear_parts())  # (ne, 4, 6, 12)
+        Ba, Bb = ops.sample_linear_parts()  # (ne, ng, 6, d)
+        d = Ba.shape[-1]
         # Bb acts on the x3 derivative: a row varies as psi_row(p x), its derivative term as
         # p psi_comp(p x + pi / 2), which is +-psi_row: the sign per row and component type
         sign = _derivative_signs(model)
-        comp_type = (np.tile(np.arange(3), 4) == 2).astype(int)  # element dof -> its component's type
+        comp_type = (np.arange(d) % DOFS_PER_NODE == 2).astype(int)  # element dof -> its component's type
         linked = fourier.ROW_TYPE[:, None] != comp_type[None, :]
         if np.any(Ba[..., linked]) or np.any(Bb[..., ~linked]):
             raise ValueError("a strain row mixes basis types: no nodal form along x3")
         Bb = Bb * sign[fourier.ROW_TYPE][:, comp_type]
-        B = np.concatenate([Ba, Bb], axis=3)  # (ne, 4, 6, 24): on (U_e, U'_e)
-        k = 0.25 * np.einsum("e,egri,rs,egsj->eij", ops.sqrt_g, B, model.D, B, optimize=True)
-        k[:, np.arange(12), np.arange(12)] += a0 * model.rho * 0.25 * ops.sqrt_g[:, None]  # lumped mass on U
-        # scatter each element's (U_e, U'_e) into the cut-out dofs' (U, U')
-        where = {d: i for i, d in enumerate(dofs)}
+        B = np.concatenate([Ba, Bb], axis=3)  # (ne, ng, 6, 2 d): on (U_e, U'_e)
+        k = np.einsum("eg,egri,rs,egsj->eij", ops.sample_weights, B, model.D, B, optimize=True)
+        k[:, np.arange(d), np.arange(d)] += a0 * model.rho * np.repeat(ops.node_volume, DOFS_PER_NODE, axis=1)  # lumped mass on U
+        # scatter each element's (U_e, U'_e) into the cut-out dofs' (U, U'), (f - 1)-weighted per
+        # point: H_q = sum_e excess[e, q] k_e, one sparse product over all elements
         n = len(dofs)
-        local = (3 * model.mesh.elements[live][:, :, None] + np.arange(3)).reshape(len(live), 12)
-        index = np.array([[where.get(d, -1) for d in row] for row in local])
-        index = np.concatenate([index, np.where(index >= 0, index + n, -1)], axis=1)  # (ne, 24)
-        H = np.zeros((excess.shape[1], 2 * n, 2 * n))
-        for e in range(len(live)):
-            ok = index[e] >= 0
-            block = k[e][np.ix_(ok, ok)]
-            at = index[e][ok]
-            H[:, at[:, None], at[None, :]] += excess[e][:, None, None] * block[None]
-        return H
+        local = element_dofs(model.mesh.elements[live])
+        position = np.searchsorted(dofs, local)
+        index = np.where(dofs[np.minimum(position, n - 1)] == local, position, -1)  # dofs no mode carries: -1
+        index = np.concatenate([index, np.where(index >= 0, index + n, -1)], axis=1)  # (ne, 2 d)
+        ok = (index[:, :, None] >= 0) & (index[:, None, :] >= 0)
+        flat = (index[:, :, None] * (2 * n) + index[:, None, :])[ok]
+        owner = np.broadcast_to(np.arange(len(live))[:, None, None], ok.shape)[ok]
+        scatter = sp.csr_matrix((k[ok], (flat, owner)), shape=((2 * n) ** 2, len(live)))
+        return (scatter @ excess).T.reshape(-1, 2 * n, 2 * n)
 
     def _V(self, x: np.ndarray) -> np.ndarray:
         """``V x`` (nq, rank) of stacked amplitudes."""

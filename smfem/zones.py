@@ -21,7 +21,7 @@ def smfem_snapshot(t: float, model, case, peps: np.ndarray, x3: np.ndarray) -> Z
     ``solid`` False in a cut-out; an axisymmetric section shows the largest value along x3
     (they are all equal).
     """
-    X, value, peak = model.mesh.element_x(), peps.mean(axis=1), float(peps.max())  # (ne, 4, 2), (ne, nq)
+    X, value, peak = model.mesh.element_x(), peps.mean(axis=1), float(peps.max())  # (ne, nodes, 2), (ne, nq)
     if case.body == "ring" and case.axisymmetric:
         return ZoneSnapshot(t, X, value.max(axis=1), peak, np.ones(len(X), bool))
     solid = element_factor(case, model.mesh, x3) == 1.0  # (ne, nq)

@@ -10,27 +10,55 @@ import scipy.sparse.linalg as sla
 
 from cases import get_case
 from cases.geometry import RING, Axis, Pressure, Section, Support
-from smfem import assembly, element, fourier
+from smfem import assembly, element, elements, fourier
+from smfem.mesh import section_mesh
 from smfem.model import Model
 
-#: 2 x 2 Gauss points in the element's natural coordinates (-1/2 ... 1/2)
-GAUSS_2 = np.array([-0.5, 0.5]) / np.sqrt(3.0)
+class FullBilinearOperators:
+    """:class:`smfem.elements.Operators` of the plain bilinear element with full 2 x 2 Gauss
+    integration of every strain row: the locking-prone baseline the moment scheme is compared
+    with, and the element the tests plug in through the protocol (``full4``). Its sample
+    points are its Gauss points, its lumped mass the row sums ``int N_i dV``."""
+
+    def __init__(self, X: np.ndarray, body: str):
+        self.X, self.body = X, body
+        self.rotation = element.local_frame(X)
+        self._T = element.strain_rotation(self.rotation)
+        N, dxi, deta = element.shape_functions(element.GAUSS_XI, element.GAUSS_ETA)  # (points, nodes)
+        J = np.stack([np.einsum("gi,eia->ega", dxi, X), np.einsum("gi,eia->ega", deta, X)], axis=3)
+        self.sample_weights = np.abs(np.linalg.det(J)) / 4.0  # (ne, points)
+        if body == RING:
+            self.sample_weights = self.sample_weights * np.einsum("gi,ei->eg", N, X[:, :, 0])
+        self.node_volume = self.sample_weights @ N
+
+    def subset(self, elements):
+        return FullBilinearOperators(self.X[elements], self.body)
+
+    def strain(self, p, xi, eta):
+        return np.einsum("ers,esk->erk", self._T, element.strain_operator(self.X, self.body, p, xi, eta))
+
+    def at_samples(self, p):
+        return np.stack([self.strain(p, xi, eta) for xi, eta in zip(element.GAUSS_XI, element.GAUSS_ETA)], axis=1)
+
+    def sample_linear_parts(self):
+        A = self.at_samples(0.0)
+        return A, self.at_samples(1.0) - A
+
+    def stiffness(self, p, D, q=None):
+        L = self.at_samples(p)
+        R = L if q is None or q == p else self.at_samples(q)
+        return np.einsum("eg,egri,ers,egsj->eij", self.sample_weights, L, D, R, optimize=True)
+
+
+#: the fully integrated bilinear element, in smfem's table of elements
+FULL4 = elements.register(elements.Element("full4", 4, element.shape_functions,
+                                           lambda X, body, nu: FullBilinearOperators(X, body),
+                                           element.gauss_interpolation))
 
 
 def element_stiffness_full(X: np.ndarray, body: str, p: float, D: np.ndarray) -> np.ndarray:
-    """Plain bilinear element with full 2 x 2 Gauss integration of every strain row: the
-    locking-prone baseline the moment scheme is compared with (never used by the solver)."""
-    k = 0.0
-    for xi in GAUSS_2:
-        for eta in GAUSS_2:
-            N, dxi, deta = element.shape_functions(xi, eta)
-            J = np.stack([np.einsum("eia,i->ea", X, dxi), np.einsum("eia,i->ea", X, deta)], axis=2)
-            w = np.abs(np.linalg.det(J)) / 4.0
-            if body == RING:
-                w = w * np.einsum("ei,i->e", X[:, :, 0], N)
-            B = element.strain_operator(X, body, p, xi, eta)
-            k = k + np.einsum("eri,ers,esj->eij", B, D, B) * w[:, None, None]
-    return k
+    """Stiffness blocks of the fully integrated bilinear element (:class:`FullBilinearOperators`)."""
+    return FullBilinearOperators(X, body).stiffness(p, D)
 
 
 def full_integration_stiffness(model: Model, i: int):
@@ -48,6 +76,18 @@ def static_solution(case, scheme: str = "moment"):
     model = Model(case)
     stiffness = [s.K if scheme == "moment" else full_integration_stiffness(model, i) for i, s in enumerate(model.systems)]
     return model, [(s.T @ sla.spsolve(K.tocsc(), s.Q)).reshape(-1, 3) for s, K in zip(model.systems, stiffness)]
+
+
+def distorted_mesh(x1_range=(1.0, 2.0), seed=0, n=(4, 3)):
+    """A rectangular patch with randomly moved interior nodes: general quadrilaterals."""
+    sec = Section("rect", s=Axis(x1_range, (n[0],)), t=Axis((0.0, 1.0), (n[1],)))
+    mesh = section_mesh(sec)
+    rng = np.random.default_rng(seed)
+    x = mesh.x.copy()
+    interior = (x[:, 0] > x1_range[0]) & (x[:, 0] < x1_range[1]) & (x[:, 1] > 0) & (x[:, 1] < 1)
+    h = (x1_range[1] - x1_range[0]) / n[0]
+    x[interior] += rng.uniform(-0.25, 0.25, (interior.sum(), 2)) * h
+    return x, mesh.elements
 
 
 def nearest_node(model, x1, x2) -> int:

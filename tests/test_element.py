@@ -5,6 +5,7 @@ import pytest
 import scipy.sparse.linalg as sla
 
 from cases.geometry import PRISM, RING
+from helpers import distorted_mesh
 from smfem import element
 from smfem.assembly import assemble, weighted_elasticity
 from smfem.constitutive import isotropic_D
@@ -13,18 +14,6 @@ from smfem.mesh import section_mesh
 from cases.geometry import Axis, Section
 
 D = isotropic_D(2.1e11, 0.3)
-
-
-def distorted_mesh(x1_range=(1.0, 2.0), seed=0, n=(4, 3)):
-    """A rectangular patch with randomly moved interior nodes: general quadrilaterals."""
-    sec = Section("rect", s=Axis(x1_range, (n[0],)), t=Axis((0.0, 1.0), (n[1],)))
-    mesh = section_mesh(sec)
-    rng = np.random.default_rng(seed)
-    x = mesh.x.copy()
-    interior = (x[:, 0] > x1_range[0]) & (x[:, 0] < x1_range[1]) & (x[:, 1] > 0) & (x[:, 1] < 1)
-    h = (x1_range[1] - x1_range[0]) / n[0]
-    x[interior] += rng.uniform(-0.25, 0.25, (interior.sum(), 2)) * h
-    return x, mesh.elements
 
 
 def stiffness(x, elements, body, p, integrals=(1.0, 1.0)):
