@@ -39,7 +39,7 @@ POINTS = {PRISM: (0.5, 0.5, 0.75), RING: (1.5, 0.5, math.pi / 4)}
 SPANS = {PRISM: ((0.0, 1.0), (0.0, 1.0)), RING: ((1.0, 2.0), (0.0, 1.0))}
 #: the mesh before refine: 4 x 4 elements
 PAPER_COUNTS = 4
-DEFAULTS = dict(dt=2.5e-3, t_end=1.0, refine=1, harmonics=6, a=0.3, dim=2, free_top=False, time="cos")
+DEFAULTS = dict(dt=2.5e-3, t_end=1.0, refine=1, harmonics=6, a=0.3, dim=2, free_top=False, time="cos", tol=1e-5)
 TIME_FUNCTIONS = {"cos": 1 - sp.cos(OMEGA * mf.T), "quadratic": mf.T**2}
 
 
@@ -85,7 +85,7 @@ def build(body: str, params: dict | None = None) -> Case:
     (s0, s1), (t0, t1) = SPANS[body]
     section = Section("rect", s=Axis((s0, s1), (PAPER_COUNTS,)), t=Axis((t0, t1), (PAPER_COUNTS,)), edges={})
     point = POINTS[body]
-    params = dict(p, E=1.0, nu=NU, rho=1.0, tau_s=math.inf, plastic=False, tol=1e-5)
+    params = dict(p, E=1.0, nu=NU, rho=1.0, tau_s=math.inf, plastic=False)
     return Case(
         name=f"manufactured_{body}", title=f"Manufactured motion of a {body} (code verification)", body=body,
         section=section, length=LENGTH if body == PRISM else 2 * math.pi, material=Material(1.0, NU, 1.0),

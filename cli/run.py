@@ -7,7 +7,8 @@ import sys
 import time
 from pathlib import Path
 
-from cases import get_case, parse_sets, rebuild
+from cases import ParameterError, get_case, parse_sets, rebuild
+from cases.params import parse_value
 from runs import validity
 from runs.estimate import estimate, summary_line
 from runs.files import write_run
@@ -42,8 +43,37 @@ def add(sub) -> None:
     run.set_defaults(handler=command)
 
 
+def split_sets(items, solver: str) -> tuple[dict, dict]:
+    """``--set`` items as the case's overrides and the solver's own options (a field of SMFEM's
+    ``SolverOptions``, or the reference's ``grading``: the names its table entry gives); an
+    option's value may be a bare word (``iteration_matrix=sor``)."""
+    mine = lookup(solver).options()
+    others = {name: s.name for s in solvers() for name in s.options() if name not in mine}
+    case_items, options = [], {}
+    for item in items or ():
+        key, sep, text = (part.strip() for part in item.partition("="))
+        if key in others and key not in mine:
+            raise UsageError(f"--set {key}: an option of {others[key]}, not of {solver}")
+        if key not in mine:
+            case_items.append(item)
+        elif not text:
+            raise UsageError(f"malformed --set {item!r}: expected KEY=VALUE")
+        else:
+            try:
+                options[key] = parse_value(key, text)
+            except ParameterError:
+                options[key] = text  # a word: a choice such as iteration_matrix=sor
+    return parse_sets(case_items), options
+
+
 def command(args) -> int:
-    case = get_case(args.case, parse_sets(args.sets))
+    sets, given = split_sets(args.sets, args.solver)
+    case = get_case(args.case, sets)
+    try:
+        args.options = lookup(args.solver).make_options(given) if given else None  # checked before any run
+    except (TypeError, ValueError) as exc:
+        raise UsageError(f"--set: {exc}") from None
+    args.given_options = {"options": given} if given else {}  # summary.json: how the run was solved
     if args.every < 0 or args.every > case.n_steps:
         raise UsageError(f"--every {args.every}: between 1 and the case's {case.n_steps} steps (0: no time series)")
     out = Path(args.out or f"out/{case.name}-{args.solver}")
@@ -54,13 +84,14 @@ def command(args) -> int:
         return _to_tolerance(case, args, out)
     wall0 = time.perf_counter()
     result = _solve(args.solver, case, f"{case.name} ({args.solver})", args.quiet,
-                    fields=not args.no_fields, every=args.every)
+                    fields=not args.no_fields, every=args.every, options=args.options)
     wall = time.perf_counter() - wall0
     est = None
     if args.estimate == "on" and result.converged and lookup(args.solver).estimated:
         est = estimate(case, args.solver, result, run=lambda solver, companion: _solve(
-            solver, companion, f"{companion.name} ({solver}, error-estimate companion)", args.quiet))
-    est = _write_checked(out, case, args.solver, result, wall, est)
+            solver, companion, f"{companion.name} ({solver}, error-estimate companion)", args.quiet,
+            options=args.options))
+    est = _write_checked(out, case, args.solver, result, wall, est, **args.given_options)
     if not result.converged:
         print(f"smfem: {case.name}: {result.message}", file=sys.stderr)
         return EXIT_NOT_CONVERGED
@@ -195,7 +226,7 @@ def _to_tolerance(case, args, out: Path) -> int:
         print(f"--tol {100 * target:g} %: {case.name}'s measured front (truths/{case.name}/front.csv) starts at "
               f"{_settings(case)}, {100 * measured:.3g} % against the stored truth")
     found = search(case, args.solver, target, args.max_cpu, fields=not args.no_fields, measured=measured,
-                   estimated=args.estimate == "on")
+                   estimated=args.estimate == "on", options=args.options)
     for k, a in enumerate(found.attempts, start=1):
         known = f"measured {100 * a.measured:.3g} % against the truth, " if a.measured is not None else ""
         print(f"--tol {100 * target:g} %: run {k} ({_settings(a.case)}): {known}{_estimated(a)}, "
@@ -210,7 +241,7 @@ def _to_tolerance(case, args, out: Path) -> int:
          "estimate": None if math.isinf(a.error) else a.error, "measured_against_truth": a.measured,
          "valid": a.valid, "cpu_s": a.cpu_s} for a in found.attempts], "cpu_s": found.cpu_s}
     _write_checked(out, best.case, args.solver, best.result, best.wall_s,
-                   best.estimate if args.estimate == "on" else None, tolerance=tolerance)
+                   best.estimate if args.estimate == "on" else None, tolerance=tolerance, **args.given_options)
     outside = "" if best.valid else " (outside the small-strain model: no accuracy of the physical body is claimed)"
     if not found.met:
         print(f"smfem: {case.name}: --tol {100 * target:g} % not met within --max-cpu {args.max_cpu:g} s: best "

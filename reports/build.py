@@ -13,11 +13,12 @@ from runs import zones
 from runs.figures import plastic_zones
 from runs.registry import lookup
 
-from . import figures, stability  # noqa: F401  (importing stability registers its section)
+from . import figures
 from .analysis import CaseAnalysis, analyse
 from .cache import RunCache
 from .document import render_html, write_pdf
-from .sections import ReportContext, build_sections
+from .outline import build_sections
+from .sections import ReportContext
 from .study import StudyResult, run_study
 from .tables import write_tables
 from .view3d import render_field

@@ -1,9 +1,7 @@
 """The report's sections, built from the analyses; the template only lays them out.
 
-A section is a title and a list of blocks (paragraph, sub-heading, list, table, figure, link).
-:data:`SECTIONS` is the document's outline; :data:`EXTRA_SECTIONS` is the place for sections
-added by later work (the stability study appends its builder there), rendered
-after the case sections and before the methods.
+A section is a title and a list of blocks (paragraph, sub-heading, list, table, figure, link);
+:mod:`reports.outline` lists the builders in the document's order.
 """
 
 from __future__ import annotations
@@ -339,12 +337,3 @@ def methods(ctx: ReportContext) -> list[Section]:
         "a rebuilt report reuses every finished run.",
     ])])]
 
-
-#: sections added by later work; each is ``builder(ctx) -> list[Section]`` (the stability section)
-EXTRA_SECTIONS: list = []
-#: the document's outline
-SECTIONS = [verdict_section, code_verification, headline, overview, cases, estimates]
-
-
-def build_sections(ctx: ReportContext) -> list[Section]:
-    return [s for builder in [*SECTIONS, *EXTRA_SECTIONS, methods] for s in builder(ctx)]

@@ -10,7 +10,7 @@ import pandas as pd
 
 from .cache import code_version
 from .plan import REFERENCE, SMFEM
-from .sections import EXTRA_SECTIONS, Section, items, p, table
+from .sections import Section, items, p, table
 
 #: studies that carry the section (the tests' tiny study does not)
 WITH_STABILITY = ("quick", "full")
@@ -49,5 +49,3 @@ def stability(ctx) -> list[Section]:
         table(rows),
     ])]
 
-
-EXTRA_SECTIONS.append(stability)

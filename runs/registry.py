@@ -56,6 +56,11 @@ class Solver:
     series : a study may run a series of it (not: the truth engines, and ``reference``,
         whose ``dim`` a study fixes by name)
     dear : its runs are a study's longest (3-D, an external program): started first
+    options : ``options() -> frozenset``, the names of its own options (``solve``'s ``options``),
+        which ``smfem run --set`` passes to it rather than to the case (a function: the solver's
+        options module is imported only when asked)
+    make_options : ``make_options(dict)``: the options ``run`` takes, checked (a ValueError or
+        TypeError names a bad one)
     """
 
     name: str
@@ -73,6 +78,8 @@ class Solver:
     command_line: bool = True
     series: bool = True
     dear: bool = False
+    options: Callable[[], frozenset] = frozenset
+    make_options: Callable[[dict], object] = dict
 
     def __post_init__(self):
         if not self.supports <= EVERYTHING:
@@ -200,9 +207,31 @@ def _calculix(case, progress, fields, every, options) -> RunResult:
     return calculix(case, progress=progress)
 
 
-_ON_A_MESH = dict(run=_reference, family=REFERENCE, estimated=True)  # the reference FEM, by dim
+def _smfem_options() -> frozenset:
+    from dataclasses import fields
+
+    from smfem.options import SolverOptions
+
+    return frozenset(f.name for f in fields(SolverOptions))
+
+
+def _smfem_make_options(options: dict):
+    from smfem.options import SolverOptions
+
+    return SolverOptions(**options)
+
+
+def _reference_options() -> frozenset:
+    return frozenset({"grading"})
+
+
+def _explicit_options() -> frozenset:
+    return frozenset({"grading", "bbar", "step_divisor"})
+
+
+_ON_A_MESH = dict(run=_reference, family=REFERENCE, estimated=True, options=_reference_options)  # by dim
 register(Solver(SMFEM, _smfem, packages=("smfem",), label="SMFEM", color="C0", marker="o", harmonics=True,
-                estimated=True))
+                estimated=True, options=_smfem_options, make_options=_smfem_make_options))
 register(Solver(REFERENCE, **_ON_A_MESH, label="reference FEM", color="C1", marker="s", series=False))
 register(Solver(REF2D, **_ON_A_MESH, dim=2, label="reference FEM 2D", color="C1", marker="s",
                 prose="the 2D reference", command_line=False))
@@ -213,4 +242,4 @@ register(Solver(MODAL, _modal, supports=frozenset(), label="reference FEM, harmo
 register(Solver(CALCULIX, _calculix, supports=frozenset((PLASTICITY,)), label="CalculiX 2D", color="C4", marker="D",
                 prose="CalculiX", dear=True))
 register(Solver(EXPLICIT, _explicit, supports=EVERYTHING - {FORCES}, label="reference FEM, explicit", color="C6",
-                marker="P", series=False))
+                marker="P", series=False, options=_explicit_options))

@@ -16,6 +16,8 @@ hold, and the caller claims no accuracy for it.
 
 from __future__ import annotations
 
+import functools
+
 import math
 import time
 from dataclasses import dataclass, field
@@ -109,19 +111,21 @@ def growth(case, over: dict) -> float:
 
 
 def search(case, solver: str, target: float, max_cpu: float, progress=None, max_runs: int = 8,
-           fields: bool = False, measured: float | None = None, estimated: bool = True) -> Search:
+           fields: bool = False, measured: float | None = None, estimated: bool = True, options=None) -> Search:
     """Runs from ``case``'s settings up, until one's estimate (or, for the first, the error
     ``measured`` against the truth at its settings) meets ``target`` (a fraction), the CPU (runs
     and companions) would pass ``max_cpu`` s. Without ``estimated`` (no companions) only the
-    first run's ``measured`` error can meet the target."""
+    first run's ``measured`` error can meet the target. ``options``: the solver's own, for every
+    run and companion."""
+    run = functools.partial(solve, options=options)
     found = Search(target)
     current = case
     while len(found.attempts) < max_runs:
         wall0 = time.perf_counter()
-        result = solve(solver, current, progress=progress, fields=fields)
+        result = run(solver, current, progress=progress, fields=fields)
         if not result.converged:
             break
-        est = estimate(current, solver, result) if estimated else {"method": "none: --estimate off"}
+        est = estimate(current, solver, result, run=run) if estimated else {"method": "none: --estimate off"}
         top = headline(current, est) if "probes" in est else None
         error = top[1] if top else math.inf
         attempt = Attempt(current, result, est, error, float(result.cpu_time_s) +

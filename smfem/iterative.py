@@ -117,7 +117,7 @@ class BlockIterative:
         self.model, self.omega = model, options.relaxation
         self.kind = options.iteration_matrix
         self.memory = options.anderson if self.kind != "sor" else 0
-        self.tol, self.max_iter = options.tolerance_for(model.case), options.max_iterations
+        self.tol, self.max_iter = model.case.params["tol"], options.max_iterations
         self.c = c = Constants.of(dt)
         self.op = StackedOperator(model)
         self.points = SamplePoints(model, options.x3_oversampling, options.x3_min_points)

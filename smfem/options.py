@@ -1,7 +1,9 @@
 """How SMFEM solves, as one explicit record passed into :func:`smfem.solver.solve`.
 
 The defaults are the measured choices (benchmarks/README.md); a study or test that wants
-another passes its own :class:`SolverOptions` instead of editing module globals.
+another passes its own :class:`SolverOptions` instead of editing module globals, and the
+command line takes each field as ``--set FIELD=VALUE``. The iterations' tolerance is not one of
+them: it is the case's ``tol`` (the scenes give the paper's), in one place.
 """
 
 from __future__ import annotations
@@ -29,9 +31,6 @@ class SolverOptions:
     anderson : iterates an Anderson acceleration of the iterations remembers (0: the plain
         iteration, the paper's; not with ``'sor'``)
     relaxation : omega of the block SOR over the harmonics (1: Gauss-Seidel)
-    tolerance : size of the correction one iteration would make (the residual through the
-        iteration matrix), relative to the amplitudes, that ends a step's iterations; None
-        takes the case's ``tol``
     max_iterations : iterations allowed per step before a run stops as not converged
     direct_max_nonzeros : the largest coupled system (nonzeros of ``K + a0 M``) factorized whole
         under ``'auto'``
@@ -52,7 +51,6 @@ class SolverOptions:
     iteration_matrix: str = "auto"
     anderson: int = 5
     relaxation: float = 1.0
-    tolerance: float | None = None
     max_iterations: int = 200
     direct_max_nonzeros: int = 40_000_000
     x3_oversampling: float = 1.0
@@ -60,9 +58,6 @@ class SolverOptions:
     layer_points_per_harmonic: int = 8
     max_state_iterations: int = 60
     element: str = elements.MOMENT4.name
-
-    def tolerance_for(self, case) -> float:
-        return self.tolerance if self.tolerance is not None else case.params["tol"]
 
     def __post_init__(self):
         if self.iteration_matrix not in ("auto", "coupled", "matrix-free", "sor"):

@@ -139,3 +139,22 @@ def test_the_fields_carry_the_stress_as_cartesian_tensors_alike_in_both_solvers(
     assert top < 0 < bottom and vertical < 0
     assert top == pytest.approx(ref[0], rel=0.03) and bottom == pytest.approx(ref[1], rel=0.03)
     assert vertical == pytest.approx(ref[2], rel=0.2)
+
+
+def test_solver_options_come_from_set_and_are_recorded(tmp_path, capsys):
+    """A field of SMFEM's SolverOptions given as --set reaches the solver (bare words allowed)
+    and summary.json records it; a bad value, or another solver's option, exits 2 with one line."""
+    out = tmp_path / "sor"
+    args = ["run", "thick_cylinder", "--set", "plastic=true", "--set", "t_end=4e-4", "--set", "iteration_matrix=sor",
+            "--set", "anderson=0", "--out", str(out), "--quiet", "--no-fields", "--estimate", "off"]
+    assert main(args) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["options"] == {"iteration_matrix": "sor", "anderson": 0}
+    assert "block SOR" in summary["info"]["solve"]
+    for bad, needle in ((["--set", "iteration_matrix=blah"], "'auto', 'coupled', 'matrix-free' or 'sor'"),
+                        (["--solver", "reference", "--set", "anderson=1"], "an option of smfem, not of reference")):
+        capsys.readouterr()
+        assert main(["run", "dome", *bad, "--out", str(tmp_path / "bad"), "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert needle in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "bad").exists()

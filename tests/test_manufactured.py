@@ -273,7 +273,8 @@ def test_the_reports_code_verification_section_comes_from_its_cached_table(tmp_p
     from types import SimpleNamespace
 
     from reports.cache import code_version
-    from reports.sections import SECTIONS, code_verification, verdict_section
+    from reports.outline import OUTLINE
+    from reports.sections import code_verification, verdict_section
 
     rows = pd.DataFrame([
         {"solver": "smfem", "body": "prism", "parameter": "space", "probe": "L2", "levels": "refine=1 refine=2",
@@ -292,7 +293,7 @@ def test_the_reports_code_verification_section_comes_from_its_cached_table(tmp_p
     assert (tmp_path / "tables" / "code_verification.csv").exists()
     assert (tmp_path / "figures" / "verification-reference-3d.png").exists()
     assert code_verification(SimpleNamespace(settings="tiny", out=tmp_path)) == []
-    assert SECTIONS.index(code_verification) == SECTIONS.index(verdict_section) + 1  # before the comparison
+    assert OUTLINE.index(code_verification) == OUTLINE.index(verdict_section) + 1  # before the comparison
 
 
 def _smfem_uniaxial(E, nu, sy, H, strains):
@@ -380,8 +381,8 @@ def test_the_iterative_systems_take_the_forces_as_the_direct_solve_does(body, ki
     from cases import verification
     from runs.registry import solve
 
-    case = verification.build(body, {"refine": 1, "harmonics": 6, "dt": 5e-3, "t_end": 0.3})
-    direct, iterated = solve(SMFEM, case), solve(SMFEM, case, options={"iteration_matrix": kind, "tolerance": 1e-10})
+    case = verification.build(body, {"refine": 1, "harmonics": 6, "dt": 5e-3, "t_end": 0.3, "tol": 1e-10})
+    direct, iterated = solve(SMFEM, case), solve(SMFEM, case, options={"iteration_matrix": kind})
     assert "(13)-(16)" in iterated.info["solve"]
     for n in direct.history:
         scale = np.abs(direct.history[n]).max()

@@ -351,7 +351,8 @@ def test_stability_section_renders_the_cached_table(tmp_path):
     from types import SimpleNamespace
 
     from reports.cache import code_version
-    from reports.sections import EXTRA_SECTIONS
+    from reports.outline import OUTLINE
+    from reports.sections import cases
     from reports.stability import stability
 
     runs = tmp_path / "runs"
@@ -369,7 +370,7 @@ def test_stability_section_renders_the_cached_table(tmp_path):
     assert section.id == "stability" and "1 of 2 figures within their limits" in section.blocks[2]["text"]
     assert (tmp_path / "tables" / "stability.csv").exists()
     assert stability(SimpleNamespace(settings="tiny", out=tmp_path)) == []
-    assert stability in EXTRA_SECTIONS  # the report renders it after the cases
+    assert OUTLINE.index(stability) > OUTLINE.index(cases)  # the report renders it after the cases
 
 
 def test_the_3d_view_renders_without_library_noise(tmp_path):
