@@ -22,8 +22,8 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from cases import CASES, get_case  # noqa: E402
-from reports.effectivity import judged, settings, summary  # noqa: E402
-from reports.stored import directory, read  # noqa: E402
+from studies.effectivity import judged, settings, summary  # noqa: E402
+from studies.stored import directory, read  # noqa: E402
 from runs import threads  # noqa: E402
 from runs.estimate import estimate  # noqa: E402
 from runs.registry import REF2D, SMFEM, solve  # noqa: E402

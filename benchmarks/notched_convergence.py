@@ -19,11 +19,11 @@ from pathlib import Path
 import numpy as np
 
 from cases import get_case
-from reports.cache import RunCache
-from reports.jobs import Job
-from reports.plan import REF2D
-from reports.study import run_cached
-from reports.truth import order_of
+from studies.cache import RunCache
+from studies.jobs import Job
+from studies.plan import REF2D
+from studies.study import run_cached
+from studies.truth import order_of
 
 CASES = ("notched_cylinder", "notched_strip")
 

@@ -17,7 +17,7 @@ import time
 
 from cases import get_case
 from reference_fem import solve as reference
-from reports.metrics import history_errors
+from studies.metrics import history_errors
 from smfem.solver import solve
 
 SLOPE = 0.01

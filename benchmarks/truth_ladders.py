@@ -21,12 +21,12 @@ import argparse
 from pathlib import Path
 
 from cases import get_case
-from reports.cache import RunCache
-from reports.jobs import Job
-from reports.stored import directory, read
-from reports.plan import EXPLICIT, EXPLICIT_TRUTH, TruthPlan, explicit_truth
-from reports.study import run_cached
-from reports.truth import assemble, jobs
+from studies.cache import RunCache
+from studies.jobs import Job
+from studies.stored import directory, read
+from studies.plan import EXPLICIT, EXPLICIT_TRUTH, TruthPlan, explicit_truth
+from studies.study import run_cached
+from studies.truth import assemble, jobs
 from runs.errors import history_errors
 
 VARIANTS = {"standard": {}, "bbar": {"bbar": True}, "graded": {"grading": 2.0}}

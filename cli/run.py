@@ -145,7 +145,7 @@ def parse_target(text: str) -> float:
 def _stored_truth(case):
     """A built-in scene's stored truth, while ``case`` has its physics (load, material, window:
     every parameter but the discretization's); None otherwise, and for a scene from a file."""
-    from reports.stored import directory, read
+    from studies.stored import directory, read
 
     path = directory(case.name)
     if case.source is not None or not (path / "summary.json").exists():
@@ -159,7 +159,7 @@ def _truth_floor(case, truth) -> float | None:
     """Three times the stored ``truth``'s uncertainty over a built-in scene's displacement and
     velocity probes (what no run can be shown to beat); None without a stored truth of the
     case's physics."""
-    from reports.metrics import TRUTH_MARGIN
+    from studies.metrics import TRUTH_MARGIN
 
     if truth is None:
         return None
@@ -171,7 +171,7 @@ def _front_start(case, truth, solver: str, target: float):
     """Where ``--tol`` starts on a built-in scene whose front is stored (``truths/CASE/front.csv``,
     measured against the same truth): the cheapest measured settings within ``target``, else the
     most accurate; (overrides, their measured error) or None."""
-    from reports.stored import read_front
+    from studies.stored import read_front
 
     front = read_front(case.name) if truth is not None else None
     if front is None:

@@ -26,9 +26,9 @@ def add(sub) -> None:
 def command(args) -> int:
     """1 if a run failed with an error (the outputs are written all the same), else 0."""
     from reports.build import build  # the reports load matplotlib, jinja2, dask: only when asked
-    from reports.executors import SchedulerUnreachable
-    from reports.jobs import FAILED
-    from reports.plan import full, quick, select
+    from studies.executors import SchedulerUnreachable
+    from studies.jobs import FAILED
+    from studies.plan import full, quick, select
 
     check_workers(args)
     plan = select(full() if args.full else quick(), getattr(args, "cases", ()))
@@ -46,7 +46,7 @@ def command(args) -> int:
     print(f"{args.command}: {len(report.study.executed)} runs executed, {report.study.cached} cached, "
           f"{report.wall_time_s:.1f} s -> {out}/ ({made}tables/, figures/)")
     if getattr(args, "store_fronts", False):
-        from reports.stored import write_fronts
+        from studies.stored import write_fronts
 
         written = write_fronts(report.tables["fronts"])
         print(f"{args.command}: fronts kept for {', '.join(written) or 'no scene (none measured against its stored truth)'}")

@@ -1,11 +1,11 @@
 """``smfem truth CASE``: a case's truth, converged in mesh, harmonics and time
-(:mod:`reports.truth`): history.csv and summary.json with per-probe uncertainty.
+(:mod:`studies.truth`): history.csv and summary.json with per-probe uncertainty.
 
 With ``--full`` the truth is the one the repository stores (``truths/CASE``, the default
 output then, when no ``--set`` changes the scene): it is made on its own path and on a second,
 independent one (``OUT/second``), and ``summary.json`` carries the distance between the two
-(:mod:`reports.calibration`) and the key that ties it to the case and the method
-(:mod:`reports.stored`).
+(:mod:`studies.calibration`) and the key that ties it to the case and the method
+(:mod:`studies.stored`).
 """
 
 from __future__ import annotations
@@ -33,10 +33,10 @@ def add(sub) -> None:
 def command(args) -> int:
     """Run (or take from the cache) the truth's levels, write ``history.csv`` and
     ``summary.json``; 3 if a level it needs stopped without a history."""
-    from reports.calibration import calibrate, second_plan
-    from reports.executors import SchedulerUnreachable
-    from reports.stored import key_of
-    from reports.truth import plan_for
+    from studies.calibration import calibrate, second_plan
+    from studies.executors import SchedulerUnreachable
+    from studies.stored import key_of
+    from studies.truth import plan_for
 
     check_workers(args)
     base = parse_sets(args.sets)
@@ -77,9 +77,9 @@ def command(args) -> int:
 
 def _make(args, base: dict, plan, cache: Path, role: str):
     """One truth path from its runs (cached); None (and a message) if a level has no history."""
-    from reports.cache import RunCache
-    from reports.study import run_cached
-    from reports.truth import assemble, jobs
+    from studies.cache import RunCache
+    from studies.study import run_cached
+    from studies.truth import assemble, jobs
 
     wanted = jobs(args.case, plan, base)
     runs, executed, cached = run_cached(list(wanted.values()), RunCache(cache), args.scheduler, args.workers,

@@ -13,11 +13,11 @@ import pandas as pd
 
 from cases import get_case
 
-from . import effectivity, metrics
-from .jobs import NOT_AVAILABLE, OK
-from .plan import series_solvers
+from studies import effectivity, metrics
+from studies.jobs import NOT_AVAILABLE, OK
+from studies.plan import series_solvers
 from .references import best_history, published_points
-from .study import CaseRuns
+from studies.study import CaseRuns
 
 #: probes whose errors make the headline measure: displacements and velocities. Stresses
 #: (wave fronts, the rod's impact) and plastic strains (a local threshold quantity, zero until a
@@ -44,7 +44,7 @@ class SolverSummary:
     truth), ``spatial`` (against the same-dt reference, runs at the case's dt only) and, per
     other family (:data:`FAMILIES`), its measure against the truth; ``front``: labels on the
     total-error work-precision front, cheapest first; ``costs``: target ->
-    :class:`reports.metrics.Cost`; ``family_costs``: family -> target -> Cost.
+    :class:`studies.metrics.Cost`; ``family_costs``: family -> target -> Cost.
     """
 
     solver: str
@@ -66,7 +66,7 @@ class CaseAnalysis:
     solvers: dict
     orders: pd.DataFrame
     published: pd.DataFrame
-    #: the error estimates against the truth (:mod:`reports.effectivity`)
+    #: the error estimates against the truth (:mod:`studies.effectivity`)
     effectivity: pd.DataFrame = field(default_factory=pd.DataFrame)
 
     @property

@@ -15,11 +15,11 @@ from runs.registry import lookup
 
 from . import figures
 from .analysis import CaseAnalysis, analyse
-from .cache import RunCache
+from studies.cache import RunCache
 from .document import render_html, write_pdf
 from .outline import build_sections
 from .sections import ReportContext
-from .study import StudyResult, run_study
+from studies.study import StudyResult, run_study
 from .tables import write_tables
 from .view3d import render_field
 
@@ -84,7 +84,7 @@ def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = No
 
     Parameters
     ----------
-    plan : case studies (:mod:`reports.plan`)
+    plan : case studies (:mod:`studies.plan`)
     out : output directory
     cache : run cache directory (default ``out/runs``)
     scheduler : dask.distributed scheduler address; None: ``workers`` local processes

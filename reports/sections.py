@@ -15,13 +15,13 @@ from pathlib import Path
 import pandas as pd
 
 from .analysis import FAMILIES, HEADLINE_MEASURE, CaseAnalysis
-from .calibration import FLOOR, SHARPNESS
-from .cache import code_version
-from .effectivity import BAND
-from .effectivity import summary as effectivity_summary
-from .metrics import TARGETS, TRUTH_MARGIN
-from .plan import REFERENCE, SMFEM
-from .study import StudyResult
+from studies.calibration import FLOOR, SHARPNESS
+from studies.cache import code_version
+from studies.effectivity import BAND
+from studies.effectivity import summary as effectivity_summary
+from studies.metrics import TARGETS, TRUTH_MARGIN
+from studies.plan import REFERENCE, SMFEM
+from studies.study import StudyResult
 from .tables import truth_table
 from .verdict import verdict
 

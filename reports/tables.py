@@ -9,14 +9,14 @@ import pandas as pd
 
 from runs.estimate import headline
 
-from . import metrics
+from studies import metrics
 from .analysis import FAMILIES, HEADLINE_MEASURE, CaseAnalysis
-from .calibration import FLOOR, SHARPNESS
-from .calibration import table as calibration_table
-from .effectivity import BAND
-from .jobs import NOT_INSTALLED, OK
-from .plan import SMFEM
-from .truth import PARTS
+from studies.calibration import FLOOR, SHARPNESS
+from studies.calibration import table as calibration_table
+from studies.effectivity import BAND
+from studies.jobs import NOT_INSTALLED, OK
+from studies.plan import SMFEM
+from studies.truth import PARTS
 
 
 def _pct(target: float) -> str:
@@ -51,7 +51,7 @@ def _estimated_errors(an: CaseAnalysis) -> dict:
 
 
 def effectivity_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
-    """Every measured estimate against the truth (:mod:`reports.effectivity`)."""
+    """Every measured estimate against the truth (:mod:`studies.effectivity`)."""
     frames = [an.effectivity for an in analyses if len(an.effectivity)]
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
@@ -63,7 +63,7 @@ SETTINGS = ("refine", "coarsen", "harmonics", "dt", "dim")
 def fronts_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     """Every run with a total error: its settings, CPU, headline error against the truth, whether
     it is on its solver's front, and the key of the truth it was measured against (what
-    ``smfem run --tol`` starts from, :func:`reports.stored.write_fronts`)."""
+    ``smfem run --tol`` starts from, :func:`studies.stored.write_fronts`)."""
     rows = []
     for an in analyses:
         key = an.truth.key if an.truth is not None else ""

@@ -14,8 +14,8 @@ import pandas as pd
 
 from runs.registry import lookup
 
-from .metrics import TARGETS, TRUTH_TOO_COARSE
-from .plan import SMFEM
+from studies.metrics import TARGETS, TRUTH_TOO_COARSE
+from studies.plan import SMFEM
 
 _SPEEDUP = re.compile(r"^([<>]?)\s*([0-9.]+)x$")
 _COST = re.compile(r"^([0-9.e+-]+) \((.*)\)$")

@@ -154,7 +154,7 @@ def write(table: pd.DataFrame, out: Path, csv: str = "orders.csv") -> list[Path]
 def cached(cache_dir: Path, quick: bool) -> pd.DataFrame:
     """:func:`verify`'s table, kept beside the report's runs by both solvers' code versions (a
     rebuilt report runs nothing new)."""
-    from .cache import code_version
+    from studies.cache import code_version
 
     path = cache_dir / f"code-verification-{'quick' if quick else 'full'}-{code_version(SMFEM)}-{code_version('reference')}.csv"
     if not path.exists():

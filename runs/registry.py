@@ -42,7 +42,7 @@ class Solver:
     family : the name ``summary.json`` gives (default ``name``)
     dim : the reference ``dim`` the name fixes (None: the case's own)
     packages : the packages whose sources decide its results besides ``cases`` and ``runs``
-        (a change to them reruns its cached runs, :func:`reports.cache.code_version`)
+        (a change to them reruns its cached runs, :func:`studies.cache.code_version`)
     supports : of :data:`EVERYTHING`. :func:`solve` refuses ``forces`` where it is missing (the
         solver would ignore them); plasticity and contact each solver refuses itself, with its
         own reason (``tests/test_registry.py`` holds the table to it)

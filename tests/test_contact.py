@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from cases import get_case
-from reports.metrics import moving_average
+from studies.metrics import moving_average
 from smfem.contact import NORMAL, SHEAR, SLIP, STICK, ContactLayer
 from smfem.model import Model
 from smfem.options import SolverOptions

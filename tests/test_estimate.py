@@ -170,8 +170,8 @@ def test_tol_starts_from_the_stored_front_and_its_measured_error_holds(tmp_path,
     """On a built-in scene the first run is the stored front's cheapest setting within the
     target, and the error the front measured there is the run's: recomputed against the stored
     truth, it is the same."""
-    from reports.metrics import history_errors
-    from reports.stored import directory, read, read_front
+    from studies.metrics import history_errors
+    from studies.stored import directory, read, read_front
 
     front = read_front("thick_cylinder")
     within = front[(front.solver == SMFEM) & (front.total <= 0.05)].sort_values("cpu_s").iloc[0]
@@ -222,7 +222,7 @@ def test_tol_claims_no_accuracy_for_a_run_outside_the_model(tmp_path, capsys):
 
 
 def test_fronts_are_kept_only_against_the_stored_truth_they_were_measured_with(tmp_path):
-    from reports.stored import FRONT, read_front, write_fronts
+    from studies.stored import FRONT, read_front, write_fronts
 
     (tmp_path / "dome").mkdir()
     (tmp_path / "dome" / "summary.json").write_text(json.dumps({"key": "abc"}))

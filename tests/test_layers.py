@@ -1,7 +1,7 @@
 """The architecture (docs/architecture.md) as a test: every module imports only its own package
 and the layers below it, and no modules import one another in a circle.
 
-Layers, top to bottom: ``cli`` -> ``reports`` -> ``runs`` -> ``smfem`` | ``reference_fem``
+Layers, top to bottom: ``cli`` -> ``reports`` -> ``studies`` -> ``runs`` -> ``smfem`` | ``reference_fem``
 (side by side: neither imports the other) -> ``cases``. Function-level imports count too. A
 ``__main__`` module (``python -m smfem``) is an entry point that nothing imports: it belongs to
 the top layer wherever it sits.
@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-RANK = {"cli": 4, "reports": 3, "runs": 2, "smfem": 1, "reference_fem": 1, "cases": 0, "truths": 0}
+RANK = {"cli": 5, "reports": 4, "studies": 3, "runs": 2, "smfem": 1, "reference_fem": 1, "cases": 0, "truths": 0}
 
 
 def module_name(path: Path) -> str:

@@ -272,7 +272,7 @@ def test_smfem_verify_writes_the_orders_and_a_figure_per_solver(tmp_path, capsys
 def test_the_reports_code_verification_section_comes_from_its_cached_table(tmp_path):
     from types import SimpleNamespace
 
-    from reports.cache import code_version
+    from studies.cache import code_version
     from reports.outline import OUTLINE
     from reports.sections import code_verification, verdict_section
 

@@ -15,7 +15,7 @@ import pytest
 
 from browser import chromium, verdict_on_first_screen
 from reports.build import build
-from reports.plan import quick
+from studies.plan import quick
 
 
 @pytest.mark.slow

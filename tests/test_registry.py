@@ -15,7 +15,7 @@ from cases import UnsupportedCase, get_case, rebuild
 from cli import main
 from reports import figures
 from reports.build import build
-from reports.plan import MODAL_TRUTH, REF2D, SMFEM, CaseStudy, Series, TruthPlan
+from studies.plan import MODAL_TRUTH, REF2D, SMFEM, CaseStudy, Series, TruthPlan
 from runs import registry
 from runs.registry import CALCULIX, CONTACT, PLASTICITY, REF3D, REFERENCE, Solver, lookup, solvers
 

@@ -12,14 +12,14 @@ import pytest
 
 from browser import chromium, screenshot, verdict_on_first_screen
 from cases import UnsupportedCase, get_case
-from reports import metrics
+from studies import metrics
 from reports.analysis import analyse
 from reports.build import build
-from reports.cache import Run, RunCache
-from reports.jobs import NOT_AVAILABLE, NOT_INSTALLED, Job, execute
-from reports.plan import CALCULIX, MODAL_TRUTH, REF2D, REF3D, SMFEM, TIME_TRUTH, CaseStudy, Series, TruthPlan, grid, quick
+from studies.cache import Run, RunCache
+from studies.jobs import NOT_AVAILABLE, NOT_INSTALLED, Job, execute
+from studies.plan import CALCULIX, MODAL_TRUTH, REF2D, REF3D, SMFEM, TIME_TRUTH, CaseStudy, Series, TruthPlan, grid, quick
 from reports.references import rod_histories
-from reports.study import CaseRuns
+from studies.study import CaseRuns
 from reports.tables import headline_table
 from cli import main
 
@@ -267,9 +267,9 @@ def test_a_solver_that_cannot_run_a_case_gives_not_available(monkeypatch, tmp_pa
 
 
 def test_study_command_writes_tables_and_figures_from_the_cache(tiny, tmp_path, monkeypatch, capsys):
-    import reports.plan
+    import studies.plan
 
-    monkeypatch.setattr(reports.plan, "quick", lambda: TINY)  # the study command reads it when it runs
+    monkeypatch.setattr(studies.plan, "quick", lambda: TINY)  # the study command reads it when it runs
     out = tmp_path / "study"
     assert main(["study", "dome", "--out", str(out), "--cache", str(tiny.out / "runs"), "--quiet"]) == 0
     printed = capsys.readouterr().out
@@ -350,7 +350,7 @@ def test_rod_theory_histories():
 def test_stability_section_renders_the_cached_table(tmp_path):
     from types import SimpleNamespace
 
-    from reports.cache import code_version
+    from studies.cache import code_version
     from reports.outline import OUTLINE
     from reports.sections import cases
     from reports.stability import stability

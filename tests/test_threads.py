@@ -20,7 +20,7 @@ print(json.dumps([p["num_threads"] for p in threadpool_info()]))
 
 @pytest.mark.parametrize("entry", [
     "from cli import main; main(['cases'])",
-    "from reports.jobs import Job, execute; execute(Job.make('dome', 'smfem', {'t_end': 1e-5}))",
+    "from studies.jobs import Job, execute; execute(Job.make('dome', 'smfem', {'t_end': 1e-5}))",
 ])
 def test_entry_points_pin_one_thread(entry):
     """In a fresh process (the pools are per process), with no thread variable set."""

@@ -18,11 +18,11 @@ from helpers import thick_cylinder_internal_pressure
 from reference_fem import modal, static
 from reference_fem.harmonic import HarmonicModel
 from reference_fem.probes import Probes
-from reports import metrics
-from reports.cache import RunCache
-from reports.plan import MODAL_TRUTH, TIME_TRUTH, TruthPlan
-from reports.study import run_cached
-from reports.truth import assemble, gci, jobs, plan_for
+from studies import metrics
+from studies.cache import RunCache
+from studies.plan import MODAL_TRUTH, TIME_TRUTH, TruthPlan
+from studies.study import run_cached
+from studies.truth import assemble, gci, jobs, plan_for
 
 
 def _static(model: HarmonicModel) -> np.ndarray:
@@ -278,7 +278,7 @@ def _synthetic_runs(name: str, plan: TruthPlan, base: dict, history):
     """Runs of a truth plan whose histories are ``history(t, dt, refine)``."""
     import pandas as pd
 
-    from reports.cache import Run
+    from studies.cache import Run
 
     case = get_case(name, base)
     runs = {}
@@ -322,7 +322,7 @@ def test_plastic_thick_cylinder_truth_uncertainty_covers_a_much_finer_run(tmp_pa
     steps (yielding and the Heaviside load excite the whole spectrum: 0.5 to 1.3 measured),
     so the truth is the finest level, its uncertainty the GCI of the ladder, which must cover
     what dt/16 says is left."""
-    from reports.jobs import Job
+    from studies.jobs import Job
 
     base = {"plastic": True, "t_end": 2e-3}
     plan = TruthPlan(TIME_TRUTH, refine=(1, 1))  # one mesh: the time part alone
@@ -343,7 +343,7 @@ def test_explicit_truth_extrapolates_where_the_interleaved_pair_confirms_it():
     observed order recovers the exact history, and the r3-r6 pair, extrapolated at the same
     order, lands on it too, so the uncertainty is tiny; an error that is not a power of h
     (the pair disagrees) leaves the finest mesh and its grid convergence index."""
-    from reports.plan import explicit_truth
+    from studies.plan import explicit_truth
 
     plan = explicit_truth(bbar=True)
     exact = lambda t: np.sin(300 * t) - 0.01
@@ -362,7 +362,7 @@ def test_explicit_truth_extrapolates_where_the_interleaved_pair_confirms_it():
 
 
 def test_explicit_plans_and_their_second_paths():
-    from reports.calibration import second_plan
+    from studies.calibration import second_plan
 
     for name in ("notched_cylinder", "notched_strip", "rod_impact"):
         plan = plan_for(name, {}, "full")
@@ -379,13 +379,13 @@ SCENES = ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_im
 
 
 def _stored(name):
-    from reports import stored
+    from studies import stored
 
     return stored.read(stored.directory(name))
 
 
 def test_a_truths_key_follows_the_case_and_the_method():
-    from reports.stored import key_of
+    from studies.stored import key_of
 
     case, plan = get_case("notched_cylinder"), plan_for("notched_cylinder", {}, "full")
     assert key_of(case, plan) == key_of(get_case("notched_cylinder"), plan_for("notched_cylinder", {}, "full"))
@@ -403,7 +403,7 @@ def test_stored_truth_key_matches_its_case(name):
     truth method changes, this fails until ``smfem truth NAME --full`` is run again."""
     import json
 
-    from reports.stored import directory, key_of
+    from studies.stored import directory, key_of
 
     summary = json.loads((directory(name) / "summary.json").read_text())
     assert summary["key"] == key_of(get_case(name), plan_for(name, {}, "full")), (
@@ -415,7 +415,7 @@ def test_stored_front_was_measured_against_the_stored_truth(name):
     """``smfem run --tol`` starts from a scene's stored front only while it was measured against
     the stored truth: when the truth is made again, this fails until ``smfem report
     --store-fronts`` is run again."""
-    from reports.stored import read_front
+    from studies.stored import read_front
 
     front = read_front(name)
     assert front is not None, f"truths/{name}/front.csv is missing or stale: run 'smfem report --store-fronts'"
@@ -444,8 +444,8 @@ def test_calibration_of_the_stored_truth(name):
     """The distance to the second path, recomputed from the two stored histories, is the one
     recorded; every probe's uncertainty covers it (with the second path's) and is at most three
     times it where it is above the floor."""
-    from reports import stored
-    from reports.calibration import FLOOR, SHARPNESS
+    from studies import stored
+    from studies.calibration import FLOOR, SHARPNESS
     from runs.errors import history_errors
 
     truth, second = _stored(name), stored.read(stored.directory(name) / "second")
@@ -463,8 +463,8 @@ def test_explicit_plastic_thick_cylinder_agrees_with_the_implicit_ladder(tmp_pat
     """The two truth engines on the plastic thick cylinder (half the window): the explicit
     reference over r1, r2, r4 against the implicit time-step ladder (r1 at dt, dt/2, dt/4, the
     r2 mesh correcting it): within the sum of their stated uncertainties."""
-    from reports.calibration import calibrate
-    from reports.plan import EXPLICIT, EXPLICIT_TRUTH
+    from studies.calibration import calibrate
+    from studies.plan import EXPLICIT, EXPLICIT_TRUTH
 
     base = {"plastic": True, "t_end": 2e-3}
     explicit = make_truth("thick_cylinder", base, TruthPlan(EXPLICIT_TRUTH, refine=(1, 2, 4), solver=EXPLICIT,

@@ -3,7 +3,7 @@
 ``smfem truth CASE --full`` makes them (it may run for hours) and writes them here; nothing
 else writes them, and they are never edited by hand. ``summary.json`` carries the key the
 truth was made for, a hash of the case's definition and of the truth method
-(:mod:`reports.stored`): the report uses a stored truth only while its key matches, and a test
+(:mod:`studies.stored`): the report uses a stored truth only while its key matches, and a test
 fails when a scene or the method changes and the stored truth no longer matches.
 
 Beside it, ``truths/CASE/front.csv``: the scene's measured work-precision points (settings, CPU,

@@ -95,7 +95,7 @@ def judged(case, truth, t, history, est: dict) -> list[dict]:
     """One row per displacement or velocity probe of a run (times ``t``, ``history`` by probe)
     and its ``error_estimate``: the estimate and its parts, the actual error against the truth,
     and the effectivity where the truth is fine enough to tell (the actual error above
-    :data:`~reports.metrics.TRUTH_MARGIN` times its uncertainty)."""
+    :data:`~studies.metrics.TRUTH_MARGIN` times its uncertainty)."""
     fields = {p.name: p.field for p in case.probes}
     window = case.references.get("comparison_window_s", 0.0)
     out = []

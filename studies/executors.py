@@ -15,7 +15,7 @@ from .jobs import Job, execute
 
 def local(jobs: list[Job], workers: int):
     """Run ``jobs`` on ``workers`` fresh processes (spawned: a forked child would inherit the
-    parent's thread pools); each pins its BLAS threads in :func:`~reports.jobs.execute`. Each
+    parent's thread pools); each pins its BLAS threads in :func:`~studies.jobs.execute`. Each
     job goes with its solver's entry: a solver registered here is not in a fresh process's table."""
     with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
         futures = {pool.submit(execute, job, lookup(job.solver)): job for job in jobs}

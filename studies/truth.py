@@ -2,7 +2,7 @@
 uncertainty, so that a run's *total* error can be measured (not only its difference from
 another solver at the same time step).
 
-Three ways to make one (:class:`reports.plan.TruthPlan`):
+Three ways to make one (:class:`studies.plan.TruthPlan`):
 
 ``modal`` (linear, homogeneous along x3)
     The reference's harmonic model integrated exactly in time (:mod:`reference_fem.modal`), so
@@ -84,9 +84,9 @@ class Truth:
     parts : probe -> its parts (``time``, ``space``, ``harmonics``, ``modes``) and the
         observed orders
     levels : the runs it is made of (solver, settings, status, CPU time)
-    key : for a stored truth, the key it was made for (:mod:`reports.stored`)
+    key : for a stored truth, the key it was made for (:mod:`studies.stored`)
     calibration : probe -> the distance to a second, independent truth path and that path's
-        uncertainty (:mod:`reports.calibration`); empty when not made
+        uncertainty (:mod:`studies.calibration`); empty when not made
     source : where it came from: computed now, or stored (and where)
     """
 

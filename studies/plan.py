@@ -22,7 +22,7 @@ THREE_D = (0.5, 1, 2)
 #: the solvers whose error estimates the quick and full reports measure against the truth (a 3-D
 #: run's companions are 3-D runs too, dear for the quick report's 10 minutes)
 ESTIMATED_SERIES = (SMFEM, REF2D)
-#: how a truth is made (:mod:`reports.truth`)
+#: how a truth is made (:mod:`studies.truth`)
 MODAL_TRUTH, TIME_TRUTH, EXPLICIT_TRUTH = "modal", "time-step halving", "explicit"
 TRUTH_METHODS = (MODAL_TRUTH, TIME_TRUTH, EXPLICIT_TRUTH)
 
@@ -108,7 +108,7 @@ class CaseStudy:
 
     The SMFEM run at the case's own settings (no level overrides) also writes ``fields.vtu``
     and plastic zones, for the 3-D view. Each solver of ``estimated`` has its error estimate
-    measured against the truth at three settings (:mod:`reports.effectivity`).
+    measured against the truth at three settings (:mod:`studies.effectivity`).
     """
 
     case: str

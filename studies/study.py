@@ -31,7 +31,7 @@ class CaseRuns:
     fields: Run | None
     truth: Truth | None = None
     truth_runs: dict = field(default_factory=dict)
-    #: (solver, setting) -> (run, its error_estimate): :mod:`reports.effectivity`
+    #: (solver, setting) -> (run, its error_estimate): :mod:`studies.effectivity`
     estimates: dict = field(default_factory=dict)
 
     def all_runs(self) -> list[Run]:
@@ -50,7 +50,7 @@ class StudyResult:
 
 def stored_truth(study: CaseStudy) -> tuple[Truth | None, str]:
     """The stored truth (``truths/CASE``) of the study's case as the study sets it up, if its
-    key matches (:mod:`reports.stored`), and why not otherwise."""
+    key matches (:mod:`studies.stored`), and why not otherwise."""
     if study.truth is None:
         return None, "the study has no truth plan"
     return find_stored(study.case, get_case(study.case, study.base), plan_for(study.case, study.base, "full"))
@@ -113,7 +113,7 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
 
     Parameters
     ----------
-    plan : case studies (:mod:`reports.plan`)
+    plan : case studies (:mod:`studies.plan`)
     cache : where finished runs are kept
     scheduler : address of a dask.distributed scheduler; None runs on local processes
     workers : local worker processes

@@ -1,6 +1,6 @@
 """Calibration of a truth: its distance to a second, independent truth path.
 
-A stored truth is made twice: by its own path (:func:`reports.truth.plan_for`, ``full``)
+A stored truth is made twice: by its own path (:func:`studies.truth.plan_for`, ``full``)
 and by a second one that shares as little as it can with it (the explicit reference against
 the modal solution, the B-bar element against the standard one, implicit Newmark with
 Lagrange-multiplier contact against central differences with a kinematic wall). For every
@@ -11,13 +11,13 @@ report, is set against the two stated uncertainties:
   within its own bar, so the two paths are within the sum);
 - *sharp*: the truth's own uncertainty is at most :data:`SHARPNESS` times the distance, where
   the distance is above :data:`FLOOR`. The floor is where sharpness stops mattering to the
-  report: a truth judges a target only from :data:`~reports.metrics.TRUTH_MARGIN` times its
+  report: a truth judges a target only from :data:`~studies.metrics.TRUTH_MARGIN` times its
   uncertainty up, so an uncertainty of at most ``SHARPNESS * FLOOR`` judges the smallest
   target; below the floor two paths agree as well as the report can use.
 
 Two paths that share a mesh ladder and an integrator (the B-bar and standard elements of the
 notched scenes) share part of their error, so their distance is a lower bound of it; the
-interleaved pair of the explicit method (:mod:`reports.truth`) measures the ladder's part.
+interleaved pair of the explicit method (:mod:`studies.truth`) measures the ladder's part.
 """
 
 from __future__ import annotations
