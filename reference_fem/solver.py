@@ -9,6 +9,7 @@ import meshio
 import numpy as np
 
 from cases.params import UnsupportedCase
+from cases.recorder import StepRecorder
 from cases.result import RunResult
 
 from .equilibrium import Elastic, NotConverged, Plastic
@@ -86,36 +87,25 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     log = ContactLog(system, model.rep == AXISYMMETRIC) if case.wall is not None else None
     if log:
         log.record(0.0, zero, v0, u_full)
-    times, rows, iterations = [0.0], [probes.values(u_full, system, v_full)], []
-    frames = [(0.0, output_mesh(model, u_full, system, v_full))] if every else []
-    converged, message = True, ""
-    zone_steps = {int(round(t / dt)) for t in case.references.get("plastic_zone_times", ())}
-    snapshots = []
-    steps = march(system, load_history(model), zero, v0, dt, n_steps)
+    plastic_2d = case.material.plastic and model.dim == 2  # the zones are drawn in a plane
+    recorder = StepRecorder(case, probes.names, every, progress,
+                            frame=lambda: output_mesh(model, u_full, system, v_full),
+                            snapshot=(lambda t: zone_snapshot(t, model, system)) if plastic_2d else None)
+    recorder.record(0, probes.values(u_full, system, v_full))
     try:
-        for n, t, u, v, a, its in steps:
+        for n, t, u, v, a, its in march(system, load_history(model), zero, v0, dt, n_steps):
             u_full[free], v_full[free], a_full[free] = u, v, a
-            times.append(t)
-            rows.append(probes.values(u_full, system, v_full, a_full))
-            iterations.append(its)
-            if every and n % every == 0:
-                frames.append((t, output_mesh(model, u_full, system, v_full)))
-            if n in zone_steps and case.material.plastic and model.dim == 2:
-                snapshots.append(zone_snapshot(t, model, system))
+            row = probes.values(u_full, system, v_full, a_full)
             if log:
                 log.record(t, u, v, u_full)
-            if progress is not None:
-                progress(n, n_steps)
+            recorder.record(n, row, its)
     except NotConverged as err:
-        converged = False
-        message = f"step {len(times)} (t = {len(times) * dt:.6g} s) did not converge: {err}"
+        step = recorder.done
+        recorder.fail(f"step {step} (t = {step * dt:.6g} s) did not converge: {err}")
     cpu = time.process_time() - cpu1
-    exact = {} if case.exact is None else {"error_l2": error_l2(model, u_full, case.exact, times[-1])}
-    history = {name: np.array([r[k] for r in rows]) for k, name in enumerate(probes.names)}
-    return RunResult(
-        t=np.array(times), history=history, n_dof=int(free.size), iterations=iterations,
-        converged=converged, message=message, cpu_time_s=cpu, snapshots=snapshots,
-        mesh=output_mesh(model, u_full, system, v_full), frames=frames,
+    exact = {} if case.exact is None else {"error_l2": error_l2(model, u_full, case.exact, recorder.last_time)}
+    return recorder.result(
+        n_dof=int(free.size), cpu_time_s=cpu, mesh=output_mesh(model, u_full, system, v_full),
         info=dict(_info(model, system, cpu_mesh), grading=grading, **(log.info() if log else {}), **exact),
     )
 

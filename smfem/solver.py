@@ -21,6 +21,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
+from cases.recorder import StepRecorder
 from cases.result import RunResult
 
 from . import woodbury
@@ -130,40 +131,27 @@ def _run(case, model, system, how, progress, with_fields, cpu0, every=0) -> RunR
     """March ``system`` over the case's window, recording every probe after every step; a
     failed step ends the run with what came before it."""
     probes = CaseProbes(case, model, system)
-    n = case.n_steps
-    values = np.full((n + 1, len(probes.names)), np.nan)
-    snapshot_steps = {int(round(t / case.dt)) for t in case.references.get("plastic_zone_times", ())}
+    state = None  # the frame and snapshot below read the state being recorded
     plastic = case.material.plastic and hasattr(system, "peps")
-    iterations, snapshots, frames, message, state = [], [], [], "", None
+    snapshot = (lambda t: smfem_snapshot(t, model, case, system.peps, system.peps_x3)) if plastic else None
+    recorder = StepRecorder(case, probes.names, every, progress, frame=lambda: _field(model, system, state),
+                            snapshot=snapshot)
     V0 = np.concatenate([s.V0 for s in model.systems])
     try:
-        for state in march(system, np.zeros_like(V0), V0, case.dt, n):
-            values[state.n] = probes.values(state, system)
+        for state in march(system, np.zeros_like(V0), V0, case.dt, case.n_steps):
+            row = probes.values(state, system)
             system.observe(state)
-            if every and state.n % every == 0:
-                frames.append((state.n * case.dt, _field(model, system, state)))
-            if state.n == 0:
-                continue
-            iterations.append(state.iterations)
-            if state.n in snapshot_steps and plastic:
-                snapshots.append(smfem_snapshot(state.n * case.dt, model, case, system.peps, system.peps_x3))
-            if progress:
-                progress(state.n, n)
+            recorder.record(state.n, row, state.iterations)
     except StepFailed as exc:
-        message = str(exc)
+        recorder.fail(str(exc))
     verdict, facts = system.report()
-    its = np.array(iterations or [0])
+    recorder.fail(verdict)
+    its = np.array(recorder.iterations or [0])
     info = {"harmonics_used": model.harmonics_used(), "factorizations": system.factorizations,
             "n_elements": model.mesh.n_elements, "solve": how,
             "iterations_mean": float(its.mean()), "iterations_max": int(its.max()), **facts}
-    message = message or verdict
-    done = len(iterations) + 1
     mesh = _field(model, system, state) if with_fields else None
     cpu = time.process_time() - cpu0
     if case.exact is not None and state is not None:  # a measurement, not part of the solve's CPU
         info["error_l2"] = error_l2(model, np.split(state.u, model.offsets[1:-1]), case.exact, state.n * case.dt)
-    return RunResult(
-        t=np.arange(done) * case.dt, history={name: values[:done, j] for j, name in enumerate(probes.names)},
-        n_dof=model.n_dof, iterations=iterations, converged=not message, message=message,
-        cpu_time_s=cpu, mesh=mesh, info=info, snapshots=snapshots, frames=frames,
-    )
+    return recorder.result(n_dof=model.n_dof, cpu_time_s=cpu, mesh=mesh, info=info)
