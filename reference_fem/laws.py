@@ -2,7 +2,8 @@
 
 Each law has the shape of :class:`cases.law.MaterialLaw` (and ``tangent``, for Newton) in the
 reference's vectors: Mandel, points first ``(n_qp, nc)``; :meth:`stress` takes the total strain
-(the reference's formulation) and the committed state, a :class:`reference_fem.plasticity.Return`.
+(the reference's formulation) and the committed state, a :class:`reference_fem.plasticity.Return`,
+and ``tangent=False`` from the explicit engine (no consistent tangent needed).
 A law is made by ``LAWS[material.law](material, dim)``; an unknown law is refused when the
 model is built (:func:`get`). Add one with :func:`register`. The numerics are the reference's
 own, independent of SMFEM's (:mod:`smfem.laws`).
