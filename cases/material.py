@@ -1,9 +1,18 @@
-"""Material constants and the one place that converts between them."""
+"""Material constants, the constitutive law they make, and the one place that converts between them.
+
+A material's :attr:`Material.law` names its law; each solver implements every law in its own
+table (SMFEM: :mod:`smfem.laws`; the reference: :mod:`reference_fem.laws`), in the shape of
+:class:`cases.law.MaterialLaw`, and the CalculiX deck writes its cards by the same name.
+"""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+#: the laws a :class:`Material` is (its ``law``): isotropic elasticity; von Mises plasticity with
+#: linear isotropic hardening (``E_T``; 0 = ideal plasticity) on top of it
+ELASTIC, VON_MISES = "elastic", "von-mises-linear-hardening"
 
 
 @dataclass(frozen=True)
@@ -21,6 +30,12 @@ class Material:
     tau_s: float = math.inf
     E_T: float = 0.0
     plastic: bool = False
+
+    @property
+    def law(self) -> str:
+        """The constitutive law's name, derived (not a field: the stored truths' keys hash the
+        fields). Data for another law is another dataclass in ``cases/`` with its own ``law``."""
+        return VON_MISES if self.plastic else ELASTIC
 
     @property
     def lame(self) -> tuple[float, float]:

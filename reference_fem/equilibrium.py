@@ -12,7 +12,6 @@ import numpy as np
 
 from . import forms
 from .linalg import factorize
-from .plasticity import equivalent_plastic_strain, radial_return
 
 #: Newton iterations allowed per step before the run stops as not converged
 MAX_ITERATIONS = 50
@@ -37,6 +36,7 @@ class Elastic:
     K, M : stiffness and mass on the free dofs (csr)
     factorizations : int, number of ``splu`` calls on ``K + c M`` or a tangent (1 here)
     sigma : (n_qp, nc) stress of the last solution (Pa), Mandel, mesh frame
+    state : the material law's committed state (:mod:`reference_fem.laws`)
     peps : (n_qp,) equivalent plastic strain (zero for an elastic body)
     """
 
@@ -52,11 +52,12 @@ class Elastic:
         self.factorizations = 1
         nc = forms.n_components(model.dim)
         self.sigma = np.zeros((model.n_qp, nc))
-        self.eps_p = np.zeros((model.n_qp, nc))
+        self.law = model.law
+        self.state = self.law.initial_state(model.n_qp)
 
     @property
     def peps(self) -> np.ndarray:
-        return equivalent_plastic_strain(self.eps_p)
+        return self.law.equivalent_plastic_strain(self.state)
 
     def stress_at(self, q: int) -> np.ndarray:
         """The stress at quadrature point ``q``, ``(nc,)`` (Mandel, mesh frame)."""
@@ -81,7 +82,7 @@ class Elastic:
 
 
 class Plastic(Elastic):
-    """Elasto-plastic equilibrium: Newton with the consistent tangent, radial return.
+    """Elasto-plastic equilibrium: Newton with the law's consistent tangent (von Mises: radial return).
 
     Converged when ``||du_i|| / ||u_i|| < tol`` (``du_i`` the Newton correction, ``u_i`` the
     displacement after it) at an iteration after the first; the first, elastic, iteration is
@@ -91,21 +92,17 @@ class Plastic(Elastic):
     def __init__(self, model, c: float, tol: float):
         super().__init__(model, c)
         self.tol = tol
-        mat = model.case.material
-        self.sigma_y, self.H = mat.sigma_y, mat.hardening_modulus
-        self.alpha = np.zeros(model.n_qp)
 
     def _return(self, u):
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):  # a diverged iterate: solve() says so
-            return radial_return(self.strain(u), self.eps_p, self.alpha, self.model.lam, self.model.mu,
-                             self.sigma_y, self.H)
+            return self.law.stress(self.strain(u), self.state)[1]
 
     def _tangent_lu(self, ret):
         """Factorized ``K_t + c M``: the elastic matrix plus the yielding points' correction."""
         y = np.flatnonzero(ret.yielding)
         nc = ret.sigma.shape[1]
         By = self.B[(y[:, None] * nc + np.arange(nc)).ravel()]
-        dK = By.T @ (forms.material_blocks(ret.tangent[y] - self.model.D, self.model.weights[y]) @ By)
+        dK = By.T @ (forms.material_blocks(self.law.tangent(ret)[y] - self.model.D, self.model.weights[y]) @ By)
         self.factorizations += 1
         try:
             return factorize(self.A + dK)
@@ -140,7 +137,7 @@ class Plastic(Elastic):
                 raise NotConverged(f"Newton diverged at iteration {it} (the residual grew {DIVERGENCE:g} times)")
             done = not ret.yielding.any() if it == 1 else np.linalg.norm(du) <= self.tol * np.linalg.norm(u)
             if done:
-                self.sigma, self.eps_p, self.alpha = ret.sigma, ret.eps_p, ret.alpha
+                self.sigma, self.state = ret.sigma, ret
                 return u, it
             lu = self._tangent_lu(ret) if ret.yielding.any() else self.lu
         raise NotConverged(f"no convergence in {MAX_ITERATIONS} iterations")

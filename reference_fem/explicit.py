@@ -45,7 +45,6 @@ from cases.result import RunResult
 from .face import plane_face
 from .mesh import build_mesh
 from .model import INTORDER, Model
-from .plasticity import equivalent_plastic_strain, radial_return
 from .probes import Probes
 from .wall import initial_gaps
 
@@ -89,10 +88,10 @@ class ExplicitSystem:
         self.K = model.stiffness()[free][:, free].tocsr()
         self.B = model.B[:, free].tocsr()
         self.BT = self.B.T  # a CSC view: its product is faster than that of a CSR copy
-        self.plastic = model.case.material.plastic
+        self.law = model.law
+        self.plastic = self.law.nonlinear  # else the stress is D eps: the linear path
         nc = self.B.shape[0] // model.n_qp
-        self.eps_p = np.zeros((model.n_qp, nc))
-        self.alpha = np.zeros(model.n_qp)
+        self.state = self.law.initial_state(model.n_qp)
         self._sigma = np.zeros((model.n_qp, nc))
         self._u = np.zeros(free.size)
         self._sigma_of = None  # the u that _sigma belongs to, for elastic runs (computed lazily)
@@ -115,19 +114,17 @@ class ExplicitSystem:
 
     @property
     def peps(self) -> np.ndarray:
-        return equivalent_plastic_strain(self.eps_p)
+        return self.law.equivalent_plastic_strain(self.state)
 
     def internal_forces(self, u: np.ndarray) -> np.ndarray:
-        """``f_int(u)`` (N); a plastic body commits the radial return's state."""
+        """``f_int(u)`` (N); a plastic body commits the law's state (von Mises: the radial return's)."""
         self._u = u
         if not self.plastic:
             return self.K @ u
-        mat, model = self.model.case.material, self.model
+        model = self.model
         eps = (self.B @ u).reshape(model.n_qp, -1)
-        ret = radial_return(eps, self.eps_p, self.alpha, model.lam, model.mu, mat.sigma_y,
-                            mat.hardening_modulus, tangent=False)
-        self._sigma, self.eps_p, self.alpha = ret.sigma, ret.eps_p, ret.alpha
-        return self.BT @ (ret.sigma * model.weights[:, None]).ravel()
+        self._sigma, self.state = self.law.stress(eps, self.state, tangent=False)
+        return self.BT @ (self._sigma * model.weights[:, None]).ravel()
 
     def constrain(self, u_new: np.ndarray) -> np.ndarray:
         """The correction that puts the face nodes of ``u_new`` that went through the wall back

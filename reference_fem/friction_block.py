@@ -18,9 +18,9 @@ from skfem import (CellBasis, ElementHex2, ElementQuad2, ElementVector, FacetBas
                    MeshHex2, MeshQuad1, MeshQuad2, asm)
 from skfem.helpers import dot
 
-from cases.material import lame
+from cases.material import Material
 
-from . import forms
+from . import forms, laws
 from .contact import wall_rows
 from .mass import consistent_mass, redistributed_mass
 from .model import INTORDER
@@ -35,9 +35,13 @@ class BlockModel:
     basis: CellBasis
     B: object
     weights: np.ndarray
-    D: np.ndarray
+    law: object
     M: object
     free: np.ndarray
+
+    @property
+    def D(self) -> np.ndarray:
+        return self.law.elastic_matrix()
 
     @property
     def dim(self) -> int:
@@ -106,7 +110,7 @@ def pulled_block(friction: float, pull: float, dim: int = 2, size=(0.1, 0.1, 0.0
     bottom = mesh.facets_satisfying(lambda x: np.isclose(x[-1], 0.0), boundaries_only=True)
     top = mesh.facets_satisfying(lambda x: np.isclose(x[-1], edges[-1]), boundaries_only=True)
     M = redistributed_mass(consistent_mass(basis, rho, False), basis, bottom, rho, False, INTORDER)
-    model = BlockModel(basis, B, weights, forms.elastic_matrix(*lame(E, nu), dim), M, np.arange(basis.N))
+    model = BlockModel(basis, B, weights, laws.get(Material(E, nu, rho), dim), M, np.arange(basis.N))
 
     fb = FacetBasis(mesh, element, facets=top, intorder=INTORDER)
     # unit tractions on the top: down (pressing) and along x (pulling)

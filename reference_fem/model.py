@@ -9,7 +9,7 @@ from skfem import CellBasis, ElementHex2, ElementQuad2, ElementVector, FacetBasi
 from cases.params import UnsupportedCase
 from cases.geometry import PRISM, RING
 
-from . import forms
+from . import forms, laws
 from .frames import AXISYMMETRIC, SOLID, body_coordinates, body_rotation, in_intervals, section_of, x3_of
 from .mass import consistent_mass, lumped_mass, redistributed_mass
 from .mesh import RefMesh, build_mesh
@@ -63,7 +63,9 @@ class Model:
         if bbar:
             self.B = forms.bbar_operator(self.B, self.weights, self.x_qp, self.basis.dx.shape[1])
         self.lam, self.mu = case.material.lame
-        self.D = forms.elastic_matrix(self.lam, self.mu, self.dim)
+        #: the reference's implementation of the material's law (an unknown one is refused here)
+        self.law = laws.get(case.material, self.dim)
+        self.D = self.law.elastic_matrix()
         if (case.variation or case.forces) and (case.material.plastic or case.wall is not None):
             raise UnsupportedCase("reference solver: body forces and a varying material are elastic and without "
                                   "a wall so far")

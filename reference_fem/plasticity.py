@@ -30,6 +30,7 @@ class Return:
     eps_p : (n_qp, nc) plastic strain
     alpha : (n_qp,) accumulated equivalent plastic strain (drives hardening)
     yielding : (n_qp,) bool, points returned to the yield surface
+    strain : (n_qp, nc) the total strain it is the state of
     """
 
     sigma: np.ndarray
@@ -37,6 +38,7 @@ class Return:
     eps_p: np.ndarray
     alpha: np.ndarray
     yielding: np.ndarray
+    strain: np.ndarray
 
 
 def deviator(x: np.ndarray) -> np.ndarray:
@@ -102,7 +104,7 @@ def radial_return(eps, eps_p, alpha, lam: float, mu: float, sigma_y: float, H: f
         eps_p[y] += flow
         alpha[y] += dgamma
     if not tangent:
-        return Return(sigma, None, eps_p, alpha, yielding)
+        return Return(sigma, None, eps_p, alpha, yielding, eps)
     tangent = np.broadcast_to(elastic, (nq, nc, nc)).copy()
     if y.size:
         ratio = dgamma / q_tr[y]
@@ -113,4 +115,4 @@ def radial_return(eps, eps_p, alpha, lam: float, mu: float, sigma_y: float, H: f
             + 2.0 * mu * (1.0 - 3.0 * mu * ratio)[:, None, None] * p_dev
             + 6.0 * mu**2 * (ratio - 1.0 / (3.0 * mu + H))[:, None, None] * np.einsum("qa,qb->qab", n, n)
         )
-    return Return(sigma, tangent, eps_p, alpha, yielding)
+    return Return(sigma, tangent, eps_p, alpha, yielding, eps)

@@ -26,8 +26,7 @@ from .wall import ContactLog, WallSystem, case_wall_rows
 def _system(model: Model, c: float):
     if model.case.wall is not None:
         return WallSystem(model, c, case_wall_rows(model))
-    mat = model.case.material
-    return Plastic(model, c, model.case.params["tol"]) if mat.plastic else Elastic(model, c)
+    return Plastic(model, c, model.case.params["tol"]) if model.law.nonlinear else Elastic(model, c)
 
 
 def load_history(model):

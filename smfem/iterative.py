@@ -6,8 +6,8 @@ iteration solves the elastic system with the residual of the current iterate,
 ``u <- u + A^-1 (Q + F_p - K u - a0 M (u - u_pred))``. ``K`` and ``M`` are applied exactly,
 the harmonic coupling of the cut-outs included (:class:`smfem.coupling.StackedOperator`);
 the plastic strains live at the sample points (:mod:`smfem.sampling`), where the trial
-stresses of the step's displacement increment are returned to the yield surface by Wilkins'
-correction (16). ``A``, the iteration matrix, is the whole coupled ``K + a0 M`` factorized
+stresses of the step's displacement increment go through the material's law (:mod:`smfem.laws`;
+von Mises: returned to the yield surface by Wilkins' correction (16)). ``A``, the iteration matrix, is the whole coupled ``K + a0 M`` factorized
 once (:func:`factorize_coupled`; exact for an elastic step: one iteration and a check), the
 same system solved by conjugate gradients with the coupling applied matrix-free and the
 diagonal blocks as preconditioner (to a relative residual of 1e-3: the outer iterations do
@@ -29,14 +29,11 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-from cases.material import lame
-
-from . import woodbury
+from . import laws, woodbury
 from .coupling import StackedOperator
 from .linalg import factorize_spd
 from .newmark import Constants, Load, StepFailed
 from .options import SolverOptions
-from .plasticity import intensity, return_map_rows
 from .sampling import SamplePoints
 
 
@@ -86,19 +83,12 @@ class Anderson:
 
 @dataclass
 class PointState:
-    """Committed material state at the sample points, rows first ``(6, n_points)``: stresses,
-    plastic strains (Voigt, engineering shears), ``relaxed = f D eps_p`` (the stress the plastic
-    strains took off, whose forces are the additional loads) and the accumulated equivalent
-    plastic strain ``alpha`` (n_points,)."""
+    """Committed state at the sample points: the law's (stresses rows first ``(6, n_points)``,
+    and whatever else the law keeps) and ``relaxed = f D eps_p`` (6, n_points), the stress the
+    inelastic strains took off, whose forces are the additional loads."""
 
-    sigma: np.ndarray
-    eps_p: np.ndarray
+    law: object
     relaxed: np.ndarray
-    alpha: np.ndarray
-
-    @classmethod
-    def zero(cls, n: int) -> "PointState":
-        return cls(np.zeros((6, n)), np.zeros((6, n)), np.zeros((6, n)), np.zeros(n))
 
 
 class BlockIterative:
@@ -144,13 +134,11 @@ class BlockIterative:
             o = self.offsets
             self.rows = [(sp.csr_matrix(K[o[i]:o[i + 1]]), sp.csr_matrix(c.a0 * M[o[i]:o[i + 1]])) for i in range(len(S))]
         self.factorizations = len(self.lus)
-        mat = model.case.material
-        self.plastic = mat.plastic
-        self.sigma_y0, self.H = mat.sigma_y, mat.hardening_modulus
         n_points = int(np.prod(self.points.point_shape[1:]))
         # the contrast material's stiffness is scaled with its factor
-        self.mu = lame(mat.E, mat.nu)[1] * np.broadcast_to(self.points.factor[:, None, :], self.points.point_shape[1:]).ravel()
-        self.state = PointState.zero(n_points)
+        factor = np.broadcast_to(self.points.factor[:, None, :], self.points.point_shape[1:]).ravel()
+        self.law = laws.get(model.case.material, factor)
+        self.state = PointState(self.law.initial_state(n_points), np.zeros((6, n_points)))
         self.loads = np.zeros_like(self.Q)  # the committed additional loads F_p
         self.timings = {"synthesis": 0.0, "stress": 0.0, "projection": 0.0, "solves": 0.0}
 
@@ -158,7 +146,8 @@ class BlockIterative:
     def peps(self) -> np.ndarray:
         """Plastic strain intensity sqrt(2/3 eps_p : eps_p) at the points over the whole x3
         range (:attr:`peps_x3`), (ne, section points, n)."""
-        return self.points.unfolded(intensity(self.state.eps_p.T).reshape(self.points.point_shape[1:]))[1]
+        peps = self.law.equivalent_plastic_strain(self.state.law)
+        return self.points.unfolded(peps.reshape(self.points.point_shape[1:]))[1]
 
     @property
     def relaxed(self) -> np.ndarray:
@@ -174,7 +163,7 @@ class BlockIterative:
     def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
         """``M a = Q - K u0`` (no plastic strain at t = 0; ``u0`` is elastic)."""
         if u0.any():
-            self.state.sigma = self.points.stress(u0).reshape(6, -1)
+            self.state.law.sigma = self.points.stress(u0).reshape(6, -1)
         force = self.load(0.0) - self.op.K(u0)
         if self.model.coupling:
             return sla.spsolve(self.model.mass_matrix().tocsc(), force)
@@ -224,12 +213,11 @@ class BlockIterative:
             dx = self.correction(x, predicted, loads)
             x = x + dx if anderson is None else anderson.next(x, dx)
             t1 = tick()
-            trial = state.sigma + pts.stress(x - u).reshape(6, -1)
+            trial = state.law.sigma + pts.stress(x - u).reshape(6, -1)
             t2 = tick()
-            sigma, alpha, at, deps_p = (return_map_rows(trial, state.alpha, self.mu, self.sigma_y0, self.H)
-                                        if self.plastic else (trial, state.alpha, (), None))
+            sigma, law_state = self.law.stress(trial, state.law)
             t3 = tick()
-            relaxed, loads = state.relaxed, self.loads
+            relaxed, loads, at = state.relaxed, self.loads, law_state.yielding
             if len(at):
                 relaxed = relaxed.copy()
                 relaxed[:, at] += trial[:, at] - sigma[:, at]  # = f D d_eps_p
@@ -244,11 +232,7 @@ class BlockIterative:
                 raise NotConverged(f"step {step_index} (t = {t:.6g} s) diverged at iteration {iteration}: "
                                    f"the amplitudes are no longer finite")
             if change2 <= self.tol**2 * max(size2, 1e-300):
-                eps_p = state.eps_p
-                if len(at):
-                    eps_p = eps_p.copy()
-                    eps_p[:, at] += deps_p
-                self.pending = (PointState(sigma, eps_p, relaxed, alpha), loads)
+                self.pending = (PointState(law_state, relaxed), loads)
                 return x, iteration
         raise NotConverged(
             f"step {step_index} (t = {t:.6g} s) did not converge in {self.max_iter} iterations "

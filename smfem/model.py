@@ -19,8 +19,7 @@ import scipy.sparse as sp
 from cases.geometry import RING
 from cases.params import UnsupportedCase
 
-from . import assembly, constraints, elements, fourier, inhomogeneity, loads, symmetry
-from .constitutive import isotropic_D
+from . import assembly, constraints, elements, fourier, inhomogeneity, laws, loads, symmetry
 from .mesh import SectionMesh, section_mesh
 
 
@@ -72,7 +71,9 @@ class Model:
                              f"elements {self.mesh.elements.shape[1]}")
         self.ops: elements.Operators = self.element.operators(self.mesh.element_x(), case.body, case.material.nu)
         mat = case.material
-        self.D = isotropic_D(mat.E, mat.nu)
+        #: SMFEM's implementation of the material's law (an unknown one is refused here)
+        self.law = laws.get(mat)
+        self.D = self.law.elastic_matrix()
         self.rho = mat.rho
         self.inhomogeneous = (bool(case.cutouts) and case.contrast < 1.0) or bool(case.variation)
         n_harm = case.harmonics

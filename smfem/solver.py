@@ -24,7 +24,7 @@ import scipy.sparse as sp
 from cases.recorder import StepRecorder
 from cases.result import RunResult
 
-from . import woodbury
+from . import laws, woodbury
 from .contact import ContactSystem
 from .exact import error_l2
 from .fields import field_mesh
@@ -79,7 +79,7 @@ def solve(case, options: SolverOptions | None = None, progress=None, with_fields
 
 def build_system(case, options: SolverOptions):
     """The model, the system that solves its steps, and the ``info['solve']`` that names it."""
-    plastic = case.material.plastic
+    plastic = laws.get(case.material).nonlinear  # a law whose stress depends on its state: the iterations
     if case.wall is not None:
         if plastic:
             raise ModelError(f"{case.name}: contact with plasticity is not supported: set plastic=false")

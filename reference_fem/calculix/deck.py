@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from cases.material import ELASTIC, VON_MISES
 from cases.params import UnsupportedCase
 
 from ..face import plane_face
@@ -89,6 +90,7 @@ def build_deck(case, every: int = 1) -> Deck:
         raise UnsupportedCase("calculix: a tilted wall (wall_slope > 0) is not exported; use wall_slope=0")
     if case.wall is not None and case.material.plastic:
         raise UnsupportedCase("calculix: contact with plasticity is not exported (as in the reference FEM)")
+    _law_cards(case.material)
     model = Model(case)
     mesh, rep, dim = model.rmesh.mesh, model.rep, model.dim
     _, cells = vtk_cells(mesh)
@@ -168,15 +170,33 @@ def _rows(values) -> list[str]:
     return [", ".join(values[i : i + PER_LINE]) + "," for i in range(0, len(values), PER_LINE)]
 
 
+def _elastic_cards(mat) -> list[str]:
+    return ["*ELASTIC", f"{mat.E:.13g}, {mat.nu:.13g}"]
+
+
+def _von_mises_cards(mat) -> list[str]:
+    """von Mises, isotropic hardening: sigma_y(eps_p) = sigma_y0 + H eps_p, as a table."""
+    lines = _elastic_cards(mat) + ["*PLASTIC", f"{mat.sigma_y:.13g}, 0."]
+    if mat.E_T:
+        lines.append(f"{mat.sigma_y + mat.hardening_modulus:.13g}, 1.")
+    return lines
+
+
+#: the material law's name (:attr:`cases.material.Material.law`) -> its cards
+LAW_CARDS = {ELASTIC: _elastic_cards, VON_MISES: _von_mises_cards}
+
+
+def _law_cards(mat):
+    """The cards of ``mat``'s law; a law without cards is refused before anything is written."""
+    cards = LAW_CARDS.get(mat.law)
+    if cards is None:
+        raise UnsupportedCase(f"calculix: material law {mat.law!r} is not exported (its laws: {', '.join(LAW_CARDS)})")
+    return cards
+
+
 def _material(case) -> list[str]:
     mat = case.material
-    lines = ["*MATERIAL, NAME=MAT", "*ELASTIC", f"{mat.E:.13g}, {mat.nu:.13g}", "*DENSITY", f"{mat.rho:.13g}"]
-    if mat.plastic:
-        # von Mises, isotropic hardening: sigma_y(eps_p) = sigma_y0 + H eps_p, as a table
-        lines += ["*PLASTIC", f"{mat.sigma_y:.13g}, 0."]
-        if mat.E_T:
-            lines.append(f"{mat.sigma_y + mat.hardening_modulus:.13g}, 1.")
-    return lines
+    return ["*MATERIAL, NAME=MAT", "*DENSITY", f"{mat.rho:.13g}", *_law_cards(mat)(mat)]
 
 
 def _supports(model: Model, used: np.ndarray) -> list[str]:

@@ -1,0 +1,116 @@
+"""The material law extension point: SMFEM's implementation of each law, by name (:data:`LAWS`).
+
+Each law has the shape of :class:`cases.law.MaterialLaw` in SMFEM's vectors (Voigt, engineering
+shears, rows first ``(6, n)``); its input to :meth:`stress` is the trial stress
+``sigma_n + D d_eps`` of the additional-loads iterations. A law is made by
+``LAWS[material.law](material, factor)``, ``factor`` the stiffness factor per point (the cut-outs'
+contrast material: 1 elsewhere). An unknown law is refused when the model is built
+(:func:`get`). Add one with :func:`register`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable
+
+import numpy as np
+
+from cases.material import ELASTIC, VON_MISES, lame
+from cases.params import UnsupportedCase
+
+from .constitutive import isotropic_D
+from .plasticity import intensity, return_map_rows
+
+
+
+@dataclass
+class ElasticState:
+    sigma: np.ndarray  # (6, n)
+    yielding: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+
+
+class Elastic:
+    """Isotropic elasticity: the stress is the trial."""
+
+    name, nonlinear = ELASTIC, False
+
+    def __init__(self, material, factor=1.0):
+        self.material = material
+
+    def elastic_matrix(self) -> np.ndarray:
+        return isotropic_D(self.material.E, self.material.nu)
+
+    def initial_state(self, n: int) -> ElasticState:
+        return ElasticState(np.zeros((6, n)))
+
+    def trial(self, strain_increment: np.ndarray, state) -> np.ndarray:
+        return state.sigma + self.elastic_matrix() @ strain_increment
+
+    def stress(self, trial: np.ndarray, state) -> tuple[np.ndarray, ElasticState]:
+        return trial, ElasticState(trial)
+
+    def equivalent_plastic_strain(self, state) -> np.ndarray:
+        return np.zeros(state.sigma.shape[1])
+
+
+@dataclass
+class PlasticState:
+    """Stresses (6, n), the accumulated equivalent plastic strain ``alpha`` (n,), the plastic
+    strains at the start of the step and the step's increments at the points that yield (the
+    whole eps_p is formed once, when asked: the iterations need only the increments)."""
+
+    sigma: np.ndarray
+    alpha: np.ndarray
+    eps_p0: np.ndarray
+    yielding: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    deps_p: np.ndarray | None = None
+
+    @cached_property
+    def eps_p(self) -> np.ndarray:
+        """The plastic strains (6, n), Voigt with engineering shears."""
+        if not len(self.yielding):
+            return self.eps_p0
+        eps_p = self.eps_p0.copy()
+        eps_p[:, self.yielding] += self.deps_p
+        return eps_p
+
+
+class VonMises(Elastic):
+    """von Mises plasticity with linear isotropic hardening, Wilkins' correction
+    (:mod:`smfem.plasticity`)."""
+
+    name, nonlinear = VON_MISES, True
+
+    def __init__(self, material, factor=1.0):
+        super().__init__(material)
+        self.mu = lame(material.E, material.nu)[1] * np.asarray(factor, float)
+        self.sigma_y0, self.H = material.sigma_y, material.hardening_modulus
+
+    def initial_state(self, n: int) -> PlasticState:
+        return PlasticState(np.zeros((6, n)), np.zeros(n), np.zeros((6, n)))
+
+    def stress(self, trial: np.ndarray, state) -> tuple[np.ndarray, PlasticState]:
+        mu = np.broadcast_to(self.mu, state.alpha.shape)
+        sigma, alpha, at, deps_p = return_map_rows(trial, state.alpha, mu, self.sigma_y0, self.H)
+        return sigma, PlasticState(sigma, alpha, state.eps_p, at, deps_p)
+
+    def equivalent_plastic_strain(self, state) -> np.ndarray:
+        return intensity(state.eps_p.T)
+
+
+#: law name -> ``(material, factor) -> law``
+LAWS: dict[str, Callable] = {Elastic.name: Elastic, VonMises.name: VonMises}
+
+
+def register(name: str, make: Callable) -> None:
+    """Add (or replace) the law ``name``: ``make(material, factor)`` gives its implementation."""
+    LAWS[name] = make
+
+
+def get(material, factor=1.0):
+    """SMFEM's implementation of ``material``'s law; an unknown law is refused."""
+    make = LAWS.get(material.law)
+    if make is None:
+        raise UnsupportedCase(f"smfem: no material law {material.law!r} (SMFEM's laws: {', '.join(LAWS)})")
+    return make(material, factor)
