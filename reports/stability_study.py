@@ -37,7 +37,7 @@ from runs.registry import solve as run_solver
 from smfem.model import Model
 from smfem.newmark import LinearSystem, march
 from smfem.probes import ProbeSet
-from smfem.solver import solve, stacked
+from smfem.solver import stacked
 
 #: the acceptance limits of the stability section
 ENERGY_DRIFT_LIMIT = 1e-10
@@ -199,10 +199,8 @@ def many_harmonics(counts=(20, 80, 200), refine: int = 2, reference_refine: int 
     """The elastic thick cylinder with ``counts`` Fourier terms: probe histories against 80 terms
     and against the reference FEM; the modes computed (the loaded ones), dof, CPU time, and the
     paper's dt relative to the explicit limit of that system."""
-    from reference_fem import solve as reference
-
-    ref = reference(get_case("thick_cylinder", {"refine": reference_refine}))
-    runs = {n: solve(get_case("thick_cylinder", {"harmonics": n, "refine": refine}), with_fields=False)
+    ref = run_solver(REFERENCE, get_case("thick_cylinder", {"refine": reference_refine}))
+    runs = {n: run_solver(SMFEM, get_case("thick_cylinder", {"harmonics": n, "refine": refine}))
             for n in sorted(set(counts) | {80})}
     rows = []
     for n in counts:
@@ -240,7 +238,7 @@ def bad_input(names=tuple(CASES)) -> list[dict]:
 def contrast_sweep(contrasts=(1e-2, 1e-4, 1e-6, 1e-8, 1e-10), t_end: float = 0.012) -> list[dict]:
     """Plastic notched cylinder (paper mesh) over the cut-out contrast: convergence, iterations
     per step, and the largest probe change against contrast 1e-8 (max-norm)."""
-    runs = {c: solve(get_case("notched_cylinder", {"contrast": c, "t_end": t_end}), with_fields=False)
+    runs = {c: run_solver(SMFEM, get_case("notched_cylinder", {"contrast": c, "t_end": t_end}))
             for c in contrasts}
     base = runs.get(1e-8) or runs[contrasts[-1]]
     rows = []
