@@ -24,7 +24,6 @@ import math
 import time
 
 import numpy as np
-import scipy.sparse.linalg as sla
 
 from cases import CASES, ParameterError, get_case, parse_sets
 from cases.analytic import lame_cylinder
@@ -32,12 +31,8 @@ from cases.geometry import Axis, Pressure
 from cases.params import out_of_range
 
 from runs.errors import history_errors
-from runs.registry import REF2D, REF3D, REFERENCE, SMFEM, lookup
+from runs.registry import REF2D, REF3D, REFERENCE, SMFEM, checks, lookup
 from runs.registry import solve as run_solver
-from smfem.model import Model
-from smfem.newmark import LinearSystem, march
-from smfem.probes import ProbeSet
-from smfem.solver import stacked
 
 #: the acceptance limits of the stability section
 ENERGY_DRIFT_LIMIT = 1e-10
@@ -46,66 +41,31 @@ AGREEMENT_LIMIT = 0.02
 ELEMENTS_PER_EDGE_LAYER = 3
 
 
-def explicit_limit(model: Model) -> tuple[float, list[float]]:
-    """Explicit stability limit ``dt_cr = 2 / omega_max`` of a decoupled model, and
-    ``omega_max`` (rad/s) of each mode: the largest eigenvalue of ``M^-1 K`` per harmonic."""
-    omegas = []
-    for s in model.systems:
-        d = 1.0 / np.sqrt(s.M)
-        omegas.append(math.sqrt(np.linalg.eigvalsh(s.K.toarray() * d[:, None] * d[None, :]).max()))
-    return 2.0 / max(omegas), omegas
+def _smfem(check: str):
+    """SMFEM's own numerical check ``check`` (:mod:`smfem.checks`), through the solver table."""
+    return checks(SMFEM)[check]
+
+
+def explicit_limit(case) -> tuple[float, list[float]]:
+    """Explicit stability limit ``dt_cr = 2 / omega_max`` of the case's decoupled SMFEM model,
+    and ``omega_max`` of each mode."""
+    return _smfem("explicit_limit")(case)
 
 
 def free_vibration(name: str = "thick_cylinder", overrides: dict | None = None, factors=(1, 10, 100),
                    n_steps: int = 10_000, seed: int = 1) -> list[dict]:
-    """Free vibration released from the static deflection under the case's load, with random
-    initial velocities of the same energy (every mode excited, the highest included), stepped
-    with ``dt = factor * dt_cr``.
-
-    Rows: ``energy_drift`` is max over all steps of |E_n - E_0| / E_0 (E kinetic plus strain);
-    ``strain_energy_max`` the largest strain energy over E_0 (bounded: at most 1 + drift);
-    ``u_max_ratio`` the largest |u| over the run relative to the initial one.
-    """
-    model = Model(get_case(name, overrides or {}))
-    K, M, Q, _, _ = stacked(model)
-    dt_cr, omegas = explicit_limit(model)
-    u0 = sla.spsolve(K.tocsc(), Q)
-    v0 = np.random.default_rng(seed).normal(size=len(Q))
-    v0 *= math.sqrt((u0 @ (K @ u0)) / (v0 @ (M * v0)))
-    rows = []
-    for factor in factors:
-        system = LinearSystem(K, M, np.zeros_like(Q), factor * dt_cr)
-        e0 = sum(system.energy(u0, v0))
-        drift, strain_max, u_max = 0.0, 0.0, np.abs(u0).max()
-        for state in march(system, u0, v0, factor * dt_cr, n_steps):
-            kinetic, strain = system.energy(state.u, state.v)
-            drift = max(drift, abs(kinetic + strain - e0) / e0)
-            strain_max = max(strain_max, strain / e0)
-            u_max = max(u_max, np.abs(state.u).max())
-        rows.append({
-            "case": name, "modes": len(model.systems), "n_dof": model.n_dof, "omega_max": max(omegas),
-            "dt_cr": dt_cr, "factor": factor, "dt": factor * dt_cr, "n_steps": n_steps, "energy_drift": drift,
-            "strain_energy_max": strain_max, "u_max_ratio": u_max / np.abs(u0).max(), "finite": bool(np.isfinite(state.u).all()),
-        })
-    return rows
+    """SMFEM's free vibration far beyond the explicit limit (:func:`smfem.checks.free_vibration`)."""
+    return _smfem("free_vibration")(get_case(name, overrides or {}), factors, n_steps, seed)
 
 
-def static_probes(case, model: Model | None = None) -> dict:
+def static_probes(case, element: str = "moment4") -> dict:
     """SMFEM static solution under the case's loads: probe name -> value."""
-    model = model or Model(case)
-    K, _, Q, _, _ = stacked(model)
-    u = sla.spsolve(K.tocsc(), Q)
-    probes = ProbeSet(model, case.probes)
-    return dict(zip(probes.names, probes.evaluate(u, u)))
+    return _smfem("static_probes")(case, element)
 
 
 def reference_static_probes(case) -> dict:
     """Reference FEM static solution under the case's loads: probe name -> value."""
-    from reference_fem import static
-    from reference_fem.probes import Probes
-
-    model, (u,), _, system = static(case)
-    return dict(zip([p.name for p in case.probes], Probes(model).values(u, system)))
+    return checks(REFERENCE)["static_probes"](case)
 
 
 def internal_pressure(p: float = 1e6, **overrides):
@@ -114,13 +74,8 @@ def internal_pressure(p: float = 1e6, **overrides):
     return dataclasses.replace(case, loads=(Pressure(p, "inner", ((0.0, 2 * math.pi),)),))
 
 
-def _held_at_zero(model: Model) -> Model:
-    """``model`` with the free normal strain gradients held at zero (the element before the
-    fix in :mod:`smfem.element`), for the comparison row."""
-    model.ops = dataclasses.replace(model.ops, free_ratio=0.0)
-    for i, s in enumerate(model.systems):
-        s.K = (s.T.T @ model.full_stiffness(i) @ s.T).tocsr()
-    return model
+#: the element before the fix in :mod:`smfem.element` (the free gradients held at zero)
+HELD_GRADIENTS = "moment4-held-gradients"
 
 
 def incompressibility(nus=(0.49, 0.499, 0.4999), p: float = 1e6, references=(REF2D, REF3D)) -> list[dict]:
@@ -136,7 +91,7 @@ def incompressibility(nus=(0.49, 0.499, 0.4999), p: float = 1e6, references=(REF
             return max(abs(values["A_ur"] / exact[0] - 1), abs(values["C_ur"] / exact[1] - 1))
 
         row = {"nu": nu, SMFEM: error(static_probes(case)),
-               "smfem_gradients_held": error(static_probes(case, _held_at_zero(Model(case))))}
+               "smfem_gradients_held": error(static_probes(case, HELD_GRADIENTS))}
         for solver in references:
             row[solver] = error(reference_static_probes(internal_pressure(p, nu=nu, dim=lookup(solver).dim)))
         rows.append(row)
@@ -190,7 +145,7 @@ def thin_dome(ratios=(54.3, 100, 200, 543, 1000), converged_meridian: int = 160)
             "meridian_needed": needed,
             "smfem_4x_needed": apex(n_meridian=needed) / converged - 1,
             "smfem_converged": apex(n_meridian=4 * converged_meridian) / converged - 1,
-            "cond_4x20": float(np.linalg.cond(Model(dome_with(h)).systems[0].K.toarray())),
+            "cond_4x20": _smfem("stiffness_condition")(dome_with(h)),
         })
     return rows
 
@@ -205,7 +160,7 @@ def many_harmonics(counts=(20, 80, 200), refine: int = 2, reference_refine: int 
     rows = []
     for n in counts:
         run = runs[n]
-        dt_cr, _ = explicit_limit(Model(get_case("thick_cylinder", {"harmonics": n, "refine": refine})))
+        dt_cr, _ = explicit_limit(get_case("thick_cylinder", {"harmonics": n, "refine": refine}))
         row = {"harmonics": n, "modes": len(run.info["harmonics_used"]), "n_dof": run.n_dof,
                "cpu_time_s": run.cpu_time_s, "dt_over_dt_cr": get_case("thick_cylinder").dt / dt_cr,
                "finite": all(np.isfinite(h).all() for h in run.history.values())}

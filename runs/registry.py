@@ -61,6 +61,9 @@ class Solver:
         options module is imported only when asked)
     make_options : ``make_options(dict)``: the options ``run`` takes, checked (a ValueError or
         TypeError names a bad one)
+    checks : ``checks() -> dict``: the solver's own numerical checks by name (the stability
+        study's: ``static_probes(case)``, and SMFEM's ``explicit_limit``, ``free_vibration``,
+        ``stiffness_condition``), imported only when asked
     """
 
     name: str
@@ -80,6 +83,7 @@ class Solver:
     dear: bool = False
     options: Callable[[], frozenset] = frozenset
     make_options: Callable[[dict], object] = dict
+    checks: Callable[[], dict] = dict
 
     def __post_init__(self):
         if not self.supports <= EVERYTHING:
@@ -147,6 +151,11 @@ def named_for(solver: str, case) -> str:
         return entry.name
     dim = case.params.get("dim", 2)
     return next((s.name for s in _TABLE.values() if s.family == entry.family and s.dim == dim), entry.name)
+
+
+def checks(solver: str | Solver) -> dict:
+    """The solver's own numerical checks by name (:attr:`Solver.checks`)."""
+    return _entry(solver).checks()
 
 
 def family(solver: str) -> str:
@@ -221,6 +230,19 @@ def _smfem_make_options(options: dict):
     return SolverOptions(**options)
 
 
+def _smfem_checks() -> dict:
+    from smfem import checks
+
+    return {name: getattr(checks, name) for name in ("static_probes", "explicit_limit", "free_vibration",
+                                                    "stiffness_condition")}
+
+
+def _reference_checks() -> dict:
+    from reference_fem import checks
+
+    return {"static_probes": checks.static_probes}
+
+
 def _reference_options() -> frozenset:
     return frozenset({"grading"})
 
@@ -229,9 +251,10 @@ def _explicit_options() -> frozenset:
     return frozenset({"grading", "bbar", "step_divisor"})
 
 
-_ON_A_MESH = dict(run=_reference, family=REFERENCE, estimated=True, options=_reference_options)  # by dim
+_ON_A_MESH = dict(run=_reference, family=REFERENCE, estimated=True, options=_reference_options,
+                  checks=_reference_checks)  # the reference FEM, by dim
 register(Solver(SMFEM, _smfem, packages=("smfem",), label="SMFEM", color="C0", marker="o", harmonics=True,
-                estimated=True, options=_smfem_options, make_options=_smfem_make_options))
+                estimated=True, options=_smfem_options, make_options=_smfem_make_options, checks=_smfem_checks))
 register(Solver(REFERENCE, **_ON_A_MESH, label="reference FEM", color="C1", marker="s", series=False))
 register(Solver(REF2D, **_ON_A_MESH, dim=2, label="reference FEM 2D", color="C1", marker="s",
                 prose="the 2D reference", command_line=False))

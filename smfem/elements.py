@@ -20,7 +20,7 @@ Conventions every element keeps:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable, Protocol
 
 import numpy as np
@@ -92,8 +92,17 @@ class Element:
 #: the moment-scheme quadrilateral of the paper (:mod:`smfem.element`), the default
 MOMENT4 = Element("moment4", 4, element.shape_functions, element.operators, element.gauss_interpolation)
 
+def _held_gradients(X, body, nu):
+    return replace(element.operators(X, body, nu), free_ratio=0.0)
+
+
+#: the moment scheme with the free normal strain gradients held at zero: the element before the
+#: fix in :mod:`smfem.element`, which locks as nu -> 1/2 (the stability study's comparison row)
+MOMENT4_HELD = Element("moment4-held-gradients", 4, element.shape_functions, _held_gradients,
+                       element.gauss_interpolation)
+
 #: every element by name
-ELEMENTS: dict[str, Element] = {MOMENT4.name: MOMENT4}
+ELEMENTS: dict[str, Element] = {MOMENT4.name: MOMENT4, MOMENT4_HELD.name: MOMENT4_HELD}
 
 
 def register(new: Element) -> Element:

@@ -37,8 +37,8 @@ def test_free_vibration_is_stable_far_beyond_the_explicit_limit(name):
 
 def test_explicit_limit_is_that_of_the_smallest_element():
     """dt_cr = 2 / omega_max must shrink in proportion to the element size (refine 1 -> 2)."""
-    coarse, _ = study.explicit_limit(study.Model(get_case("thick_cylinder")))
-    fine, omegas = study.explicit_limit(study.Model(get_case("thick_cylinder", {"refine": 2})))
+    coarse, _ = study.explicit_limit(get_case("thick_cylinder"))
+    fine, omegas = study.explicit_limit(get_case("thick_cylinder", {"refine": 2}))
     assert fine / coarse == pytest.approx(0.5, rel=0.05)
     assert len(omegas) == 6
 

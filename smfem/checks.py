@@ -1,0 +1,77 @@
+"""SMFEM's own numerical checks, for the stability study (reached through the solver table,
+``runs.registry.checks('smfem')``): the static solution's probes, the explicit stability limit,
+free vibration far beyond it, and the conditioning of a harmonic's stiffness."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.sparse.linalg as sla
+
+from .model import Model
+from .newmark import LinearSystem, march
+from .probes import ProbeSet
+from .solver import stacked
+
+
+def static_probes(case, element: str = "moment4") -> dict:
+    """The static solution under the case's loads: probe name -> value."""
+    model = Model(case, element=element)
+    K, _, Q, _, _ = stacked(model)
+    u = sla.spsolve(K.tocsc(), Q)
+    probes = ProbeSet(model, case.probes)
+    return dict(zip(probes.names, probes.evaluate(u, u)))
+
+
+def explicit_limit(case) -> tuple[float, list[float]]:
+    """Explicit stability limit ``dt_cr = 2 / omega_max`` of the case's decoupled model, and
+    ``omega_max`` (rad/s) of each mode: the largest eigenvalue of ``M^-1 K`` per harmonic."""
+    return _explicit_limit(Model(case))
+
+
+def _explicit_limit(model: Model) -> tuple[float, list[float]]:
+    omegas = []
+    for s in model.systems:
+        d = 1.0 / np.sqrt(s.M)
+        omegas.append(math.sqrt(np.linalg.eigvalsh(s.K.toarray() * d[:, None] * d[None, :]).max()))
+    return 2.0 / max(omegas), omegas
+
+
+def free_vibration(case, factors=(1, 10, 100), n_steps: int = 10_000, seed: int = 1) -> list[dict]:
+    """Free vibration released from the static deflection under the case's load, with random
+    initial velocities of the same energy (every mode excited, the highest included), stepped
+    with ``dt = factor * dt_cr``.
+
+    Rows: ``energy_drift`` is max over all steps of |E_n - E_0| / E_0 (E kinetic plus strain);
+    ``strain_energy_max`` the largest strain energy over E_0 (bounded: at most 1 + drift);
+    ``u_max_ratio`` the largest |u| over the run relative to the initial one.
+    """
+    model = Model(case)
+    K, M, Q, _, _ = stacked(model)
+    dt_cr, omegas = _explicit_limit(model)
+    u0 = sla.spsolve(K.tocsc(), Q)
+    v0 = np.random.default_rng(seed).normal(size=len(Q))
+    v0 *= math.sqrt((u0 @ (K @ u0)) / (v0 @ (M * v0)))
+    rows = []
+    for factor in factors:
+        system = LinearSystem(K, M, np.zeros_like(Q), factor * dt_cr)
+        e0 = sum(system.energy(u0, v0))
+        drift, strain_max, u_max = 0.0, 0.0, np.abs(u0).max()
+        for state in march(system, u0, v0, factor * dt_cr, n_steps):
+            kinetic, strain = system.energy(state.u, state.v)
+            drift = max(drift, abs(kinetic + strain - e0) / e0)
+            strain_max = max(strain_max, strain / e0)
+            u_max = max(u_max, np.abs(state.u).max())
+        rows.append({
+            "case": case.name, "modes": len(model.systems), "n_dof": model.n_dof, "omega_max": max(omegas),
+            "dt_cr": dt_cr, "factor": factor, "dt": factor * dt_cr, "n_steps": n_steps, "energy_drift": drift,
+            "strain_energy_max": strain_max, "u_max_ratio": u_max / np.abs(u0).max(),
+            "finite": bool(np.isfinite(state.u).all()),
+        })
+    return rows
+
+
+def stiffness_condition(case) -> float:
+    """2-norm condition number of the first harmonic's stiffness."""
+    return float(np.linalg.cond(Model(case).systems[0].K.toarray()))
