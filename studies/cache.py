@@ -106,11 +106,14 @@ class RunCache:
     def __init__(self, root: Path, warn=None):
         self.root = Path(root)
         self.warn = warn or (lambda line: print(line, file=sys.stderr))
+        self._paths: dict[Job, Path] = {}  # a job's key is made once (a study asks several times)
 
     def path(self, job: Job) -> Path:
-        key = key_of(job)
-        digest = hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()[:20]
-        return self.root / job.case / job.solver / digest
+        if job not in self._paths:
+            key = key_of(job)
+            digest = hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()[:20]
+            self._paths[job] = self.root / job.case / job.solver / digest
+        return self._paths[job]
 
     def load(self, job: Job) -> Run | None:
         """The stored run of ``job``, or None if it has not run with this code version or its
