@@ -170,6 +170,8 @@ class ContactLayer:
             raise ModelError(f"{case.name}: the contact layer is implemented for bodies of revolution only")
         if model.coupling:
             raise ModelError(f"{case.name}: contact with material varying along x3 (cut-outs) is not supported")
+        if model.mesh.order != 1:  # its layer elements are the moment scheme's, on 2-node face segments
+            raise ModelError(f"{case.name}: the contact layer needs a 4-node section element, not {model.element.name!r}")
         self.model, self.h, self.E, self.G = model, float(thickness), float(stiffness), 0.5 * float(stiffness)
         wall = case.wall
         self.f = float(wall.friction)

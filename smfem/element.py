@@ -128,9 +128,10 @@ class ElementOperators:
         return element_stiffness(self, p, D, q)
 
 
-def local_frame(X: np.ndarray) -> np.ndarray:
-    """(n, 2, 2) rotations with rows t1 (along xi at the centre) and t2 (t1 turned by +90 deg)."""
-    _, dxi, _ = shape_functions(0.0, 0.0)
+def local_frame(X: np.ndarray, shape=shape_functions) -> np.ndarray:
+    """(n, 2, 2) rotations with rows t1 (along xi at the centre) and t2 (t1 turned by +90 deg);
+    ``shape``: the element's shape functions (any node count)."""
+    _, dxi, _ = shape(0.0, 0.0)
     t1 = np.einsum("eia,i->ea", X, dxi)
     t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
     return np.stack([t1, np.column_stack([-t1[:, 1], t1[:, 0]])], axis=1)
@@ -148,26 +149,28 @@ def strain_rotation(R: np.ndarray) -> np.ndarray:
     return T
 
 
-def strain_operator(X: np.ndarray, body: str, p: float, xi, eta) -> np.ndarray:
-    """Full strain operator ``(n, 6, 12)`` in global section axes at one local point.
+def strain_operator(X: np.ndarray, body: str, p: float, xi, eta, shape=shape_functions) -> np.ndarray:
+    """Full strain operator ``(n, 6, 3 nodes)`` in global section axes at one local point of
+    the isoparametric element with shape functions ``shape`` (the bilinear one by default).
 
     ``xi`` and ``eta`` may be complex (complex-step differentiation). Ring: x1 = r and
     e33 = (u1 + p u3) / r, g13 = u3,1 - u3 / r - p u1 / r, g23 = u3,2 - p u2 / r.
     Prism: e33 = -p u3, g13 = p u1 + u3,1, g23 = p u2 + u3,2.
     """
-    N, dxi, deta = shape_functions(xi, eta)
+    N, dxi, deta = shape(xi, eta)
+    nodes = X.shape[1]
     J = np.stack([np.einsum("eia,i->ea", X, dxi), np.einsum("eia,i->ea", X, deta)], axis=2)
     det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
     inv = np.stack([np.stack([J[:, 1, 1], -J[:, 0, 1]], 1), np.stack([-J[:, 1, 0], J[:, 0, 0]], 1)], 1) / det[:, None, None]
-    dN = np.stack([dxi, deta])  # (2, 4)
-    G = np.einsum("bi,eba->eia", dN, inv)  # dN_i / dx_a, (n, 4, 2)
+    dN = np.stack([dxi, deta])  # (2, nodes)
+    G = np.einsum("bi,eba->eia", dN, inv)  # dN_i / dx_a, (n, nodes, 2)
     n = len(X)
-    B = np.zeros((n, 6, 4, 3), dtype=G.dtype)
+    B = np.zeros((n, 6, nodes, 3), dtype=G.dtype)
     B[:, 0, :, 0] = G[:, :, 0]
     B[:, 1, :, 1] = G[:, :, 1]
     B[:, 3, :, 0], B[:, 3, :, 1] = G[:, :, 1], G[:, :, 0]
     B[:, 4, :, 2], B[:, 5, :, 2] = G[:, :, 0], G[:, :, 1]
-    Nn = np.broadcast_to(N, (n, 4))
+    Nn = np.broadcast_to(N, (n, nodes))
     if body == RING:
         inv_r = 1.0 / np.einsum("ei,i->e", X[:, :, 0], N)[:, None]
         B[:, 2, :, 0] = Nn * inv_r
@@ -179,7 +182,7 @@ def strain_operator(X: np.ndarray, body: str, p: float, xi, eta) -> np.ndarray:
         B[:, 2, :, 2] = -p * Nn
         B[:, 4, :, 0] = p * Nn
         B[:, 5, :, 1] = p * Nn
-    return B.reshape(n, 6, 12)
+    return B.reshape(n, 6, 3 * nodes)
 
 
 def operators(X: np.ndarray, body: str, nu: float) -> ElementOperators:

@@ -25,7 +25,7 @@ from typing import Callable, Protocol
 
 import numpy as np
 
-from . import element
+from . import element, quad9
 
 #: displacement components per node: two in the section, one along x3
 DOFS_PER_NODE = 3
@@ -76,6 +76,8 @@ class Element:
     operators : ``(X (ne, nodes, 2), body, nu) -> Operators``
     sample_interpolation : ``(xi, eta) -> (ng,)`` weights that interpolate values at the
         sample points to a local point (the plastic strain probes)
+    mesh_order : the section mesh it needs (:func:`smfem.mesh.section_mesh`): 1, the 4 corners;
+        2, the 9 nodes of the mesh refined once in (s, t)
     """
 
     name: str
@@ -83,6 +85,7 @@ class Element:
     shape_functions: Callable
     operators: Callable[..., Operators]
     sample_interpolation: Callable
+    mesh_order: int = 1
 
     @property
     def dofs(self) -> int:
@@ -101,8 +104,11 @@ def _held_gradients(X, body, nu):
 MOMENT4_HELD = Element("moment4-held-gradients", 4, element.shape_functions, _held_gradients,
                        element.gauss_interpolation)
 
+#: the 9-node Lagrange quadrilateral, fully integrated (:mod:`smfem.quad9`)
+QUAD9 = Element("quad9", 9, quad9.shape_functions, quad9.operators, quad9.gauss_interpolation, mesh_order=2)
+
 #: every element by name
-ELEMENTS: dict[str, Element] = {MOMENT4.name: MOMENT4, MOMENT4_HELD.name: MOMENT4_HELD}
+ELEMENTS: dict[str, Element] = {e.name: e for e in (MOMENT4, MOMENT4_HELD, QUAD9)}
 
 
 def register(new: Element) -> Element:

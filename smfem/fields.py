@@ -16,7 +16,7 @@ from .assembly import element_dofs
 def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: np.ndarray | None = None,
                peps_x3: np.ndarray | None = None, v_modes: list[np.ndarray] | None = None,
                relaxed: np.ndarray | None = None) -> meshio.Mesh:
-    """Hexahedral 3-D mesh with the synthesized displacement (and, given ``v_modes``, velocity)
+    """Hexahedral 3-D mesh (8-node cells on the section elements' corners) with the synthesized displacement (and, given ``v_modes``, velocity)
     as cartesian point data, and each cell's stress (cartesian tensor, 9 components) as cell
     data: the elastic stress of the amplitudes at the element's centre and the cell's middle
     along x3, less ``relaxed`` (the plastic strains' share, (6, n_elements, n_x3_points) at
@@ -46,7 +46,9 @@ def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: 
         point_data["velocity"] = _cartesian(model, v_modes, x3).reshape(-1, 3)
     here = np.arange(len(nxt))
     n = mesh.n_nodes
-    e = mesh.elements
+    # the corners only: a 9-node element's cell is the hexahedron of its corner nodes (its other
+    # nodes are points of the file that no cell uses; their values are exact there)
+    e = mesh.elements[:, :4]
     hexes = np.concatenate([e[None] + (here * n)[:, None, None], e[None] + (nxt * n)[:, None, None]], axis=2)
     middle = x3[here] + 0.5 * ((x3[nxt] - x3[here]) % (2 * math.pi if ring else np.inf))
     local = _elastic_stress(model, u_modes, middle)  # (n_cells along x3, ne, 6)

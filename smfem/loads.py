@@ -6,6 +6,7 @@ import numpy as np
 
 from cases.geometry import PRISM, RING, interval_fourier
 
+from . import quad9
 from .elements import Element
 from .fourier import Mode, psi_integrals, psi_squared_integrals
 from .fourier import psi as psi_values
@@ -15,23 +16,16 @@ from .mesh import SectionMesh
 def edge_pressure_vector(mesh: SectionMesh, edge: str, body: str) -> np.ndarray:
     """Nodal forces (3 n_nodes,) of a unit pressure on ``edge``, per unit of the x3 integral.
 
-    Exact for a pressure normal to each straight segment and linear shape functions; for a ring
-    the surface element carries the radius: ``int N_i r ds = ds (2 r_i + r_j) / 6``.
+    ``int N_i p n ds`` (a ring's times r) by Gauss-Legendre quadrature along every segment
+    (:func:`_edge_points`), with ``n ds`` the tangent turned inwards: exact for straight 2-node
+    segments and for curved 3-node ones (a polynomial of degree 5 at most).
     """
-    seg, owner = mesh.edge_segments(edge)
-    xa, xb = mesh.x[seg[:, 0]], mesh.x[seg[:, 1]]
-    d = xb - xa
-    length = np.linalg.norm(d, axis=1)
-    normal = np.column_stack([d[:, 1], -d[:, 0]]) / length[:, None]
-    inward = mesh.x[mesh.elements[owner]].mean(axis=1) - 0.5 * (xa + xb)
-    normal *= np.sign(np.einsum("ea,ea->e", normal, inward))[:, None]  # pressure pushes inwards
-    if body == RING:
-        wa, wb = (2 * xa[:, 0] + xb[:, 0]) / 6, (xa[:, 0] + 2 * xb[:, 0]) / 6
-    else:
-        wa = wb = np.full(len(seg), 0.5)
+    x, weight, N, seg, tangent, owner = _edge_points(mesh, body, edge, with_tangent=True)
+    normal = np.stack([tangent[..., 1], -tangent[..., 0]], axis=-1)  # (ns, ng, 2), times ds / dparameter
+    inward = mesh.x[mesh.elements[owner, :4]].mean(axis=1) - mesh.x[seg].mean(axis=1)
+    normal *= np.sign(np.einsum("ea,ea->e", normal.sum(axis=1), inward))[:, None, None]  # pressure pushes inwards
     f = np.zeros((mesh.n_nodes, 3))
-    np.add.at(f[:, :2], seg[:, 0], normal * (wa * length)[:, None])
-    np.add.at(f[:, :2], seg[:, 1], normal * (wb * length)[:, None])
+    np.add.at(f[:, :2], seg, np.einsum("sg,ga,sgd->sad", weight, N, normal))
     return f.ravel()
 
 
@@ -120,14 +114,25 @@ def _section_points(mesh: SectionMesh, body: str, element: Element):
     return x, jac * w2 * (x[..., 0] if body == RING else 1.0), N, mesh.elements
 
 
-def _edge_points(mesh: SectionMesh, body: str, edge: str):
+def segment_shape_functions(nodes: int, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Lagrange functions (ng, nodes) of a segment's equally spaced nodes at ``s`` in [0, 1],
+    and their derivatives along s."""
+    if nodes == 2:
+        return np.column_stack([1 - s, s]), np.tile([-1.0, 1.0], (len(s), 1))
+    return quad9.lagrange_1d(s - 0.5)
+
+
+def _edge_points(mesh: SectionMesh, body: str, edge: str, with_tangent: bool = False):
     """Quadrature along every segment of a section edge: points (ns, ng, 2), weights (ns, ng;
-    a ring's times r), the segment's linear shape functions (ng, 2) and its nodes."""
+    ``ds`` times a ring's r), the segment's shape functions (ng, nodes) and its nodes;
+    ``with_tangent``: also ``dx / dparameter`` (ns, ng, 2) and the element each segment is of."""
     g, gw = np.polynomial.legendre.leggauss(SECTION_POINTS)
     s, w = 0.5 * (g + 1), 0.5 * gw
-    N = np.column_stack([1 - s, s])  # (ng, 2)
-    seg, _ = mesh.edge_segments(edge)
-    X = mesh.x[seg]  # (ns, 2, 2)
-    x = np.einsum("ga,sad->sgd", N, X)
-    length = np.linalg.norm(X[:, 1] - X[:, 0], axis=1)
-    return x, length[:, None] * w[None, :] * (x[..., 0] if body == RING else 1.0), N, seg
+    seg, owner = mesh.edge_segments(edge)
+    N, dN = segment_shape_functions(seg.shape[1], s)  # (ng, nodes)
+    X = mesh.x[seg]  # (ns, nodes, 2)
+    x, tangent = np.einsum("ga,sad->sgd", N, X), np.einsum("ga,sad->sgd", dN, X)
+    weight = w[None, :] * (x[..., 0] if body == RING else 1.0)
+    if with_tangent:
+        return x, weight, N, seg, tangent, owner
+    return x, weight * np.linalg.norm(tangent, axis=-1), N, seg

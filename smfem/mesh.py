@@ -1,4 +1,6 @@
-"""Structured cross-section meshes of 4-node elements generated from a case's section block."""
+"""Structured cross-section meshes generated from a case's section block: 4-node elements, or
+(``order=2``) 9-node ones on the grid refined once in (s, t), whose mid-side nodes lie on the
+section's curved edges (they are mapped from (s, t) like the corners)."""
 
 from __future__ import annotations
 
@@ -17,9 +19,11 @@ class SectionMesh:
     ----------
     x : (n_nodes, 2) section coordinates (x1, x2) of the nodes
     st : (n_nodes, 2) parametric coordinates (s, t) of the nodes
-    elements : (n_elements, 4) node indices, counter-clockwise in (s, t)
+    elements : (n_elements, nodes) node indices: the corners counter-clockwise in (s, t) first
+        (order 2: then the mid-sides of edges 0-1, 1-2, 2-3, 3-0 and the centre)
     shape : (n_s, n_t) numbers of elements along s and t
     section : the block it was generated from
+    order : 1 (corner nodes) or 2 (the grid refined once: 9 nodes per element)
     """
 
     x: np.ndarray
@@ -27,6 +31,7 @@ class SectionMesh:
     elements: np.ndarray
     shape: tuple[int, int]
     section: Section
+    order: int = 1
 
     @property
     def n_nodes(self) -> int:
@@ -42,19 +47,21 @@ class SectionMesh:
 
     def element_st_centres(self) -> np.ndarray:
         """(n_elements, 2) parametric coordinates of the element centres."""
-        return self.st[self.elements].mean(axis=1)
+        return self.st[self.elements[:, :4]].mean(axis=1)
 
     def edge_nodes(self, name: str) -> np.ndarray:
-        """Nodes on a named edge, ordered along it."""
+        """Nodes on a named edge, ordered along it (mid-side nodes included)."""
         ns, nt = self.shape
-        grid = np.arange(self.n_nodes).reshape(nt + 1, ns + 1)  # [t index, s index]
+        grid = np.arange(self.n_nodes).reshape(self.order * nt + 1, self.order * ns + 1)  # [t index, s index]
         edge = self.section.edge(name)
         return {"s_min": grid[:, 0], "s_max": grid[:, -1], "t_min": grid[0], "t_max": grid[-1]}[edge]
 
     def edge_segments(self, name: str) -> tuple[np.ndarray, np.ndarray]:
-        """Segments ``(n_seg, 2)`` of node pairs on an edge and the element each belongs to."""
+        """Segments ``(n_seg, order + 1)`` of an edge's nodes, ordered along it (a quadratic
+        segment's mid-side node in the middle), and the element each belongs to."""
         nodes = self.edge_nodes(name)
-        seg = np.column_stack([nodes[:-1], nodes[1:]])
+        k = self.order
+        seg = np.column_stack([nodes[j:len(nodes) - k + j:k] for j in range(k + 1)])
         ns, nt = self.shape
         grid = np.arange(self.n_elements).reshape(nt, ns)
         edge = self.section.edge(name)
@@ -67,21 +74,39 @@ class SectionMesh:
         return np.flatnonzero(np.abs(self.x[:, 0]) <= tol * scale)
 
 
-def section_mesh(section: Section, scale: float = 1, extra=((), ())) -> SectionMesh:
+#: per order, the grid offsets (along s, along t) of an element's nodes, in the node order of
+#: :class:`SectionMesh` (order 2: :data:`smfem.quad9.NODE_I`, ``NODE_J``), and the same nodes
+#: clockwise (a mirrored block)
+NODE_OFFSETS = {1: (np.array([0, 1, 1, 0]), np.array([0, 0, 1, 1])),
+                2: (np.array([0, 2, 2, 0, 1, 2, 1, 0, 1]), np.array([0, 0, 2, 2, 0, 1, 2, 1, 1]))}
+MIRRORED = {1: [0, 3, 2, 1], 2: [0, 3, 2, 1, 7, 6, 5, 4, 8]}
+
+
+def _refined(grid: np.ndarray, order: int) -> np.ndarray:
+    """The grid with ``order - 1`` equally spaced points inserted in every interval."""
+    fractions = np.arange(order) / order
+    inner = grid[:-1, None] + fractions[None, :] * np.diff(grid)[:, None]
+    return np.append(inner.ravel(), grid[-1])
+
+
+def section_mesh(section: Section, scale: float = 1, extra=((), ()), order: int = 1) -> SectionMesh:
     """Tensor-product mesh of the block, each graded segment split ``scale`` times more, with
-    the ``extra`` (s, t) points (the cut-outs' edges) as nodes (:meth:`cases.geometry.Axis.grid`)."""
+    the ``extra`` (s, t) points (the cut-outs' edges) as nodes (:meth:`cases.geometry.Axis.grid`);
+    ``order=2``: the same elements with 9 nodes each (mid-sides and centre at the middles in (s, t))."""
     s, t = section.s.grid(scale, extra[0]), section.t.grid(scale, extra[1])
-    S, T = np.meshgrid(s, t)  # [t index, s index]
-    x1, x2 = section.to_x(S.ravel(), T.ravel())
     ns, nt = len(s) - 1, len(t) - 1
+    S, T = np.meshgrid(_refined(s, order), _refined(t, order))  # [t index, s index]
+    x1, x2 = section.to_x(S.ravel(), T.ravel())
+    width = order * ns + 1
     i, j = np.meshgrid(np.arange(ns), np.arange(nt))
-    n0 = (j * (ns + 1) + i).ravel()
-    elements = np.column_stack([n0, n0 + 1, n0 + ns + 2, n0 + ns + 1])
+    n0 = (order * j * width + order * i).ravel()
+    di, dj = NODE_OFFSETS[order]
+    elements = n0[:, None] + dj[None, :] * width + di[None, :]
     x = np.column_stack([x1, x2])
     # a polar block (s sin t, s cos t) is mirrored with respect to (s, t): keep the elements
     # counter-clockwise in (x1, x2) so that every Jacobian is positive
     e = x[elements]
     area2 = (e[:, 2, 0] - e[:, 0, 0]) * (e[:, 3, 1] - e[:, 1, 1]) - (e[:, 3, 0] - e[:, 1, 0]) * (e[:, 2, 1] - e[:, 0, 1])
     if np.all(area2 < 0):
-        elements = elements[:, [0, 3, 2, 1]]
-    return SectionMesh(x, np.column_stack([S.ravel(), T.ravel()]), elements, (ns, nt), section)
+        elements = elements[:, MIRRORED[order]]
+    return SectionMesh(x, np.column_stack([S.ravel(), T.ravel()]), elements, (ns, nt), section, order)

@@ -64,8 +64,8 @@ class Model:
         self.case = case
         self.body = case.body
         self.length = case.length
-        self.mesh: SectionMesh = section_mesh(case.section, case.mesh_scale, case.cutout_edges)
         self.element = elements.get(element)
+        self.mesh: SectionMesh = section_mesh(case.section, case.mesh_scale, case.cutout_edges, self.element.mesh_order)
         if self.mesh.elements.shape[1] != self.element.nodes:
             raise ModelError(f"{case.name}: element {element!r} has {self.element.nodes} nodes, the section mesh's "
                              f"elements {self.mesh.elements.shape[1]}")

@@ -78,14 +78,15 @@ def static_solution(case, scheme: str = "moment"):
     return model, [(s.T @ sla.spsolve(K.tocsc(), s.Q)).reshape(-1, 3) for s, K in zip(model.systems, stiffness)]
 
 
-def distorted_mesh(x1_range=(1.0, 2.0), seed=0, n=(4, 3)):
-    """A rectangular patch with randomly moved interior nodes: general quadrilaterals."""
+def distorted_mesh(x1_range=(1.0, 2.0), seed=0, n=(4, 3), order=1):
+    """A rectangular patch with randomly moved interior nodes: general quadrilaterals (``order``
+    2: 9-node ones, mid-side nodes moved too, so their edges are curved)."""
     sec = Section("rect", s=Axis(x1_range, (n[0],)), t=Axis((0.0, 1.0), (n[1],)))
-    mesh = section_mesh(sec)
+    mesh = section_mesh(sec, order=order)
     rng = np.random.default_rng(seed)
     x = mesh.x.copy()
     interior = (x[:, 0] > x1_range[0]) & (x[:, 0] < x1_range[1]) & (x[:, 1] > 0) & (x[:, 1] < 1)
-    h = (x1_range[1] - x1_range[0]) / n[0]
+    h = (x1_range[1] - x1_range[0]) / n[0] / order
     x[interior] += rng.uniform(-0.25, 0.25, (interior.sum(), 2)) * h
     return x, mesh.elements
 
