@@ -168,3 +168,11 @@ def test_fields_are_written_on_the_corner_hexahedra():
     cells = run.mesh.cells_dict["hexahedron"]
     model = Model(case, element=QUAD9)
     assert cells.shape == (72 * model.mesh.n_elements, 8) and np.isfinite(run.mesh.point_data["displacement"]).all()
+
+
+def test_the_contact_layer_refuses_a_nine_node_body():
+    """Its layer elements are the moment scheme's, on 2-node face segments (docs/architecture.md)."""
+    from smfem.model import ModelError
+
+    with pytest.raises(ModelError, match="4-node section element"):
+        solve(get_case("rod_impact"), SolverOptions(element=QUAD9), with_fields=False)
