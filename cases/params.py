@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ast
 import math
+import re
 from dataclasses import dataclass
 
 
@@ -65,6 +66,10 @@ class Spec:
     def check(self, key: str, value):
         """Return ``value`` converted to the spec's type, or raise ParameterError."""
         bad = f"{key}={value!r} is out of range: {key} must be {self.describe()}"
+        if self.type is str:
+            if not isinstance(value, str) or value not in (self.choices or ()):
+                raise ParameterError(bad)
+            return value
         if self.type is bool:
             if isinstance(value, str) and value.lower() in ("true", "false"):
                 value = value.lower() == "true"
@@ -110,7 +115,15 @@ COMMON = {
     # a relative change below 1e-14 is round-off: such a tolerance could never be met
     "tol": Spec(float, 1e-14, 1.0, open_hi=True, help="iteration tolerance"),
     "dim": Spec(int, choices=(2, 3), help="reference FEM: 2 (plane strain/axisymmetric) or 3"),
+    # absent from every scene's defaults: a run that does not set it keeps its keys (truths, cache)
+    "element": Spec(str, choices=("moment4", "quad9"),
+                    help="SMFEM's section element: the paper's moment-scheme quadrilateral (the default) or the "
+                         "9-node quadratic (smfem/quad9.py)"),
 }
+
+
+#: a bare word ``--set`` takes as a choice (``element=quad9``)
+WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*")
 
 
 def parse_value(key: str, text: str):
@@ -122,7 +135,9 @@ def parse_value(key: str, text: str):
     try:
         return ast.literal_eval(text)
     except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
-        raise ParameterError(f"{key}={text!r} is not a value: write a number or true/false") from None
+        if WORD.fullmatch(text):  # a choice such as element=quad9; the key's spec checks it
+            return text
+        raise ParameterError(f"{key}={text!r} is not a value: write a number, true/false or a choice") from None
 
 
 def parse_sets(items) -> dict:
@@ -162,6 +177,8 @@ def out_of_range(spec: Spec) -> list[str]:
     stability section sweep them over every key."""
     if spec.type is bool:
         return ["3", "maybe", "1.0"]
+    if spec.type is str:
+        return ["1", "x", "true"]
     if spec.choices is not None:
         return [repr(max(spec.choices) + 1), "x"]
     bad = ["nan", "inf", "-inf", "'x'", "(1, 2)"]

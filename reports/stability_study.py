@@ -58,7 +58,7 @@ def free_vibration(name: str = "thick_cylinder", overrides: dict | None = None, 
     return _smfem("free_vibration")(get_case(name, overrides or {}), factors, n_steps, seed)
 
 
-def static_probes(case, element: str = "moment4") -> dict:
+def static_probes(case, element: str | None = None) -> dict:
     """SMFEM static solution under the case's loads: probe name -> value."""
     return _smfem("static_probes")(case, element)
 

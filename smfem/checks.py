@@ -15,8 +15,9 @@ from .probes import ProbeSet
 from .solver import stacked
 
 
-def static_probes(case, element: str = "moment4") -> dict:
-    """The static solution under the case's loads: probe name -> value."""
+def static_probes(case, element: str | None = None) -> dict:
+    """The static solution under the case's loads (``element``: another than the case's): probe
+    name -> value."""
     model = Model(case, element=element)
     K, _, Q, _, _ = stacked(model)
     u = sla.spsolve(K.tocsc(), Q)

@@ -60,10 +60,11 @@ class Model:
     takes the coupling from the stresses instead.
     """
 
-    def __init__(self, case, nonlinear: bool = False, element: str = elements.MOMENT4.name):
+    def __init__(self, case, nonlinear: bool = False, element: str | None = None):
         self.case = case
         self.body = case.body
         self.length = case.length
+        element = element or case.params.get("element", elements.MOMENT4.name)  # the scene's, by default
         self.element = elements.get(element)
         self.mesh: SectionMesh = section_mesh(case.section, case.mesh_scale, case.cutout_edges, self.element.mesh_order)
         if self.mesh.elements.shape[1] != self.element.nodes:

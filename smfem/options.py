@@ -3,14 +3,13 @@
 The defaults are the measured choices (benchmarks/README.md); a study or test that wants
 another passes its own :class:`SolverOptions` instead of editing module globals, and the
 command line takes each field as ``--set FIELD=VALUE``. The iterations' tolerance is not one of
-them: it is the case's ``tol`` (the scenes give the paper's), in one place.
+them: it is the case's ``tol`` (the scenes give the paper's), in one place; so is the section
+element, the case's ``element``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-from . import elements
 
 
 @dataclass(frozen=True)
@@ -44,8 +43,6 @@ class SolverOptions:
         (2 integrate the products of harmonics exactly; the edge of a contact zone needs more,
         benchmarks/README.md)
     max_state_iterations : contact-layer state iterations allowed per step
-    element : the section element, a name in :data:`smfem.elements.ELEMENTS` (the default: the
-        paper's moment-scheme quadrilateral)
     """
 
     iteration_matrix: str = "auto"
@@ -57,11 +54,10 @@ class SolverOptions:
     x3_min_points: int = 256
     layer_points_per_harmonic: int = 8
     max_state_iterations: int = 60
-    element: str = elements.MOMENT4.name
 
     def __post_init__(self):
         if self.iteration_matrix not in ("auto", "coupled", "matrix-free", "sor"):
             raise ValueError(f"iteration_matrix={self.iteration_matrix!r}: 'auto', 'coupled', 'matrix-free' or 'sor'")
-        elements.get(self.element)  # a name that is not in the table fails here, not mid-run
+
         if self.x3_oversampling < 1.0:
             raise ValueError(f"x3_oversampling={self.x3_oversampling}: at least 1 (fewer points are not exact)")

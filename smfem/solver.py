@@ -86,9 +86,9 @@ def build_system(case, options: SolverOptions):
         if case.forces:
             raise ModelError(f"{case.name}: body forces with a wall are not supported")
         # harmonic 0 alone for an axisymmetric scene, else every mode the wall's symmetry allows
-        model = Model(case, nonlinear=not case.axisymmetric, element=options.element)
+        model = Model(case, nonlinear=not case.axisymmetric)
         return model, ContactSystem(model, case.dt, options), ContactSystem.HOW
-    model = Model(case, nonlinear=plastic, element=options.element)
+    model = Model(case, nonlinear=plastic)
     coupled = bool(model.coupling)
     kind = options.iteration_matrix
     low_rank = coupled and woodbury.preferred(model)
@@ -102,7 +102,7 @@ def build_system(case, options: SolverOptions):
                else "decoupled harmonics, one block-diagonal factorization")
         return model, LinearSystem(K, M, Q, case.dt, force_terms(case, model)), how
     if not plastic:  # elastic but not to be factorized whole: the iterations
-        model = Model(case, nonlinear=True, element=options.element)
+        model = Model(case, nonlinear=True)
     n = len(model.systems)
     how = {"coupled": (f"additional loads (13)-(16), the whole coupled elastic system of {n} harmonics as iteration "
                        "matrix" + (" (block-diagonal plus the cut-outs' low-rank correction, Woodbury)" if low_rank else "")

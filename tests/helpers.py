@@ -56,6 +56,12 @@ FULL4 = elements.register(elements.Element("full4", 4, element.shape_functions,
                                            element.gauss_interpolation))
 
 
+def with_element(case, name: str):
+    """``case`` run with the section element ``name`` (the scene parameter ``element``, set
+    past the scene's choices: the tests' own elements are not offered to users)."""
+    return dataclasses.replace(case, params={**case.params, "element": name})
+
+
 def element_stiffness_full(X: np.ndarray, body: str, p: float, D: np.ndarray) -> np.ndarray:
     """Stiffness blocks of the fully integrated bilinear element (:class:`FullBilinearOperators`)."""
     return FullBilinearOperators(X, body).stiffness(p, D)

@@ -8,11 +8,10 @@ import scipy.sparse as sp
 
 from cases import get_case
 from cases.geometry import PRISM, RING
-from helpers import FULL4, distorted_mesh
+from helpers import FULL4, distorted_mesh, with_element
 from smfem import assembly, elements, fourier
 from smfem.constitutive import isotropic_D
 from smfem.model import Model
-from smfem.options import SolverOptions
 from smfem.solver import solve, stacked
 
 D = isotropic_D(2.1e11, 0.3)
@@ -47,7 +46,7 @@ def test_the_sample_points_integrate_the_stiffness_and_the_nodes_share_the_volum
 
 def test_an_element_not_in_the_table_is_refused_up_front():
     with pytest.raises(ValueError, match="moment4"):
-        SolverOptions(element="quad27")
+        Model(with_element(get_case("thick_cylinder"), "quad27"))
 
 
 def test_the_fully_integrated_element_runs_the_thick_cylinder_and_converges():
@@ -61,7 +60,7 @@ def test_the_fully_integrated_element_runs_the_thick_cylinder_and_converges():
     for refine in (1, 2, 3):
         case = get_case("thick_cylinder", {"refine": refine})
         moment = solve(case, with_fields=False)
-        full = solve(case, SolverOptions(element=FULL4.name), with_fields=False)
+        full = solve(with_element(case, FULL4.name), with_fields=False)
         assert full.converged and history_error(full, moment) <= 5e-3
         errors.append(history_error(full, fine))
     assert errors[0] / errors[1] > 3.5 and errors[1] / errors[2] > 3.5
@@ -71,7 +70,7 @@ def test_the_fully_integrated_element_runs_the_plastic_thick_cylinder():
     """The plastic iterations go through the element's sample points: the plastic thick
     cylinder with full4 stays within 1 % of the moment scheme (measured 0.6 %, peps included)."""
     case = get_case("thick_cylinder", {"plastic": True})
-    moment, full = solve(case, with_fields=False), solve(case, SolverOptions(element=FULL4.name), with_fields=False)
+    moment, full = solve(case, with_fields=False), solve(with_element(case, FULL4.name), with_fields=False)
     assert full.converged and history_error(full, moment) <= 1e-2
 
 

@@ -8,7 +8,7 @@ import scipy.sparse.linalg as sla
 from cases import get_case
 from cases.analytic import hinged_strip_sine, lame_cylinder
 from cases.geometry import PRISM, RING
-from helpers import (clamped_plate, distorted_mesh, dome_with, nearest_node, patch_solution,
+from helpers import (clamped_plate, with_element, distorted_mesh, dome_with, nearest_node, patch_solution,
                      thick_cylinder_internal_pressure)
 from runs import registry
 from runs.errors import history_errors
@@ -16,7 +16,6 @@ from smfem import elements
 from smfem.assembly import assemble, weighted_elasticity
 from smfem.constitutive import isotropic_D
 from smfem.model import Model
-from smfem.options import SolverOptions
 from smfem.solver import solve
 from test_static import strip_case
 
@@ -144,7 +143,7 @@ def test_dynamics_agree_with_the_reference_better_than_moment4(name):
     5.2e-2 (refine 2: 5.3e-4 and 1.4e-2)."""
     case = get_case(name, {"refine": 1})
     reference = registry.solve("reference-2d", case)
-    quad = solve(case, SolverOptions(element=QUAD9), with_fields=False)
+    quad = solve(with_element(case, QUAD9), with_fields=False)
     moment = solve(case, with_fields=False)
     assert quad.converged
     assert reference_error(quad, reference) < reference_error(moment, reference)
@@ -157,14 +156,14 @@ def test_the_plastic_thick_cylinder_runs_and_agrees_with_the_reference_better_th
     peps_max 3.6e-2 (1.2e-1); the same iterations (292 against 293)."""
     case = get_case("thick_cylinder", {"plastic": True})
     reference = registry.solve("reference-2d", case)
-    quad = solve(case, SolverOptions(element=QUAD9), with_fields=False)
+    quad = solve(with_element(case, QUAD9), with_fields=False)
     moment = solve(case, with_fields=False)
     assert quad.converged and reference_error(quad, reference) < 0.5 * reference_error(moment, reference)
 
 
 def test_fields_are_written_on_the_corner_hexahedra():
     case = get_case("thick_cylinder", {"refine": 1})
-    run = solve(case, SolverOptions(element=QUAD9))
+    run = solve(with_element(case, QUAD9))
     cells = run.mesh.cells_dict["hexahedron"]
     model = Model(case, element=QUAD9)
     assert cells.shape == (72 * model.mesh.n_elements, 8) and np.isfinite(run.mesh.point_data["displacement"]).all()
@@ -175,4 +174,22 @@ def test_the_contact_layer_refuses_a_nine_node_body():
     from smfem.model import ModelError
 
     with pytest.raises(ModelError, match="4-node section element"):
-        solve(get_case("rod_impact"), SolverOptions(element=QUAD9), with_fields=False)
+        solve(with_element(get_case("rod_impact"), QUAD9), with_fields=False)
+
+
+def test_the_element_is_a_scene_parameter(tmp_path, capsys):
+    """``--set element=quad9`` runs the quadratic element (more unknowns on the same mesh, its
+    name in summary.json's params); a name that is not one of the scene's choices exits 2."""
+    import json
+
+    from cli import main
+
+    for element in ("moment4", "quad9"):
+        assert main(["run", "dome", "--set", f"element={element}", "--set", "t_end=2e-5", "--out",
+                     str(tmp_path / element), "--quiet", "--no-fields", "--estimate", "off"]) == 0
+    m4, q9 = (json.loads((tmp_path / e / "summary.json").read_text()) for e in ("moment4", "quad9"))
+    assert q9["params"]["element"] == "quad9" and q9["n_dof"] > 2 * m4["n_dof"]
+    capsys.readouterr()
+    assert main(["run", "dome", "--set", "element=quad8", "--out", str(tmp_path / "bad"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "element='quad8' is out of range: element must be one of moment4, quad9" in err, err
