@@ -52,7 +52,7 @@ def split_sets(items, solver: str) -> tuple[dict, dict]:
     case_items, options = [], {}
     for item in items or ():
         key, sep, text = (part.strip() for part in item.partition("="))
-        if key in others and key not in mine:
+        if key in others:
             raise UsageError(f"--set {key}: an option of {others[key]}, not of {solver}")
         if key not in mine:
             case_items.append(item)

@@ -80,10 +80,10 @@ def plan(quick: bool = True) -> tuple[Ladder, ...]:
     return tuple(ladders)
 
 
-def run_level(ladder: Ladder, level: dict, a: float | None = None) -> dict:
+def run_level(ladder: Ladder, level: dict) -> dict:
     """One level: the L2 error at the end, per probe its error against the exact motion and its
     end value, and the CPU."""
-    params = {**ladder.base, **level, **({"a": a} if a is not None else {})}
+    params = {**ladder.base, **level}
     if ladder.solver == REF3D:
         params["dim"] = 3
     case = verification.build(ladder.body, params)

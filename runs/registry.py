@@ -185,10 +185,9 @@ def solve(solver: str | Solver, case, progress: Callable[[int, int], None] | Non
 
 # -- how each solver runs: its module imported only then ---------------------------------------
 def _smfem(case, progress, fields, every, options) -> RunResult:
-    from smfem.options import SolverOptions
     from smfem.solver import solve as smfem
 
-    options = SolverOptions(**options) if isinstance(options, dict) else options
+    options = _smfem_make_options(options) if isinstance(options, dict) else options
     return smfem(case, options, progress=progress, with_fields=fields, every=every)
 
 

@@ -1,8 +1,8 @@
 """The error against a known exact motion (``Case.exact``): the relative L2 norm over the body.
 
 Code verification's global measure: the displacement the amplitudes synthesize, with the
-element's shape functions, against the exact field, integrated by 3 x 3 Gauss points
-per element and along x3 by Gauss-Legendre (prism) or the trapezoidal rule around the ring
+element's shape functions, against the exact field, integrated by the section quadrature the
+force terms use (:func:`smfem.loads.section_points`, 3 x 3 Gauss points per element) and along x3 by Gauss-Legendre (prism) or the trapezoidal rule around the ring
 (exact for its harmonics). A global norm converges at the element's order (2) on any mesh;
 a single point's value may superconverge before it does.
 """
@@ -17,30 +17,21 @@ from cases.geometry import RING
 from cases.manufactured import numeric, time_function
 
 from . import fourier
+from .loads import section_points
 
 X3_POINTS = 64
 
 
 def error_l2(model, u_modes: list[np.ndarray], motion, t: float) -> float:
     """``||u_h - u|| / ||u||`` at time ``t`` of the amplitudes ``u_modes`` (one per system)."""
-    g, w = np.polynomial.legendre.leggauss(3)
-    xi, eta = np.meshgrid(g / 2, g / 2, indexing="ij")
-    wg = np.outer(w, w).ravel() / 4
-    N, dxi, deta = model.element.shape_functions(xi.ravel(), eta.ravel())  # (9, nodes)
-    X = model.mesh.element_x()  # (ne, nodes, 2)
-    x = np.einsum("gi,eia->ega", N, X)
-    J = np.einsum("gi,eia->ega", dxi, X)[..., :, None] * [1, 0] + np.einsum("gi,eia->ega", deta, X)[..., :, None] * [0, 1]
-    area = np.abs(np.linalg.det(J)) * wg  # (ne, 9)
-    ring = model.body == RING
-    if ring:
+    x, area, N, dofs = section_points(model.mesh, model.body, model.element)  # a ring's area times r
+    if model.body == RING:
         x3 = np.arange(X3_POINTS) * 2 * math.pi / X3_POINTS
         w3 = np.full(X3_POINTS, 2 * math.pi / X3_POINTS)
-        area = area * x[..., 0]  # r dr dz dtheta
     else:
         g3, w3 = np.polynomial.legendre.leggauss(X3_POINTS)
         x3, w3 = (g3 + 1) * model.length / 2, w3 * model.length / 2
     u = np.zeros((len(x3),) + area.shape + (3,))
-    dofs = model.mesh.elements
     for s, amp in zip(model.systems, u_modes):
         nodal = (s.T @ amp).reshape(-1, 3)[dofs]  # (ne, nodes, 3), section axes and x3
         at = np.einsum("gi,eic->egc", N, nodal)

@@ -87,7 +87,7 @@ def force_amplitudes(case, mesh: SectionMesh, modes: list[Mode], element: Elemen
     psi = {m: psi_values(m, x3, case.body, case.length) for m in modes}
     out = []
     for term in case.forces:
-        x, weight, N, nodes = _section_points(mesh, case.body, element) if term.edge is None else _edge_points(mesh, case.body, term.edge)
+        x, weight, N, nodes = section_points(mesh, case.body, element) if term.edge is None else _edge_points(mesh, case.body, term.edge)
         f = [numeric(c)(x[..., 0, None], x[..., 1, None], x3[None, None, :], 0.0) for c in term.pattern]  # (n, ng, n3)
         amps = {}
         for m in modes:
@@ -100,7 +100,7 @@ def force_amplitudes(case, mesh: SectionMesh, modes: list[Mode], element: Elemen
     return out
 
 
-def _section_points(mesh: SectionMesh, body: str, element: Element):
+def section_points(mesh: SectionMesh, body: str, element: Element):
     """Quadrature over every element: points (ne, ng, 2), weights (ne, ng; a ring's times r),
     shape functions (ng, nodes) and the elements' nodes."""
     g, gw = np.polynomial.legendre.leggauss(SECTION_POINTS)

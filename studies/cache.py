@@ -119,14 +119,12 @@ class RunCache:
         """The stored run of ``job``, or None if it has not run with this code version or its
         entry is damaged (then said, and run again)."""
         path = self.path(job)
-        meta = path / "job.json"
-        if not meta.exists():
+        if not (path / "job.json").exists():
             return None
-        damage = _damage(path)
+        record, damage = _checked(path)
         if damage:
             self.warn(f"cache: {job.describe()}: {damage} ({path}); running it again")
             return None
-        record = json.loads(meta.read_text())
         return _read(job, record["status"], record["message"], path)
 
     def store(self, job: Job, outcome: Outcome) -> Run:
@@ -149,21 +147,22 @@ class RunCache:
         return _read(job, outcome.status, outcome.message, path)
 
 
-def _damage(path: Path) -> str:
-    """What is wrong with the entry at ``path`` ('' if nothing): its record, a file, a checksum."""
+def _checked(path: Path) -> tuple[dict | None, str]:
+    """The entry's record at ``path`` and what is wrong with the entry ('' if nothing): its
+    record, a file, a checksum."""
     try:
         record = json.loads((path / "job.json").read_text())
         files = record["files"]
         record["status"], record["message"]
     except (OSError, ValueError, KeyError, TypeError):
-        return "job.json is not a record this version writes"
+        return None, "job.json is not a record this version writes"
     for name, digest in files.items():
         file = path / name
         if not file.is_file():
-            return f"{name} is missing"
+            return record, f"{name} is missing"
         if _sha256(file.read_bytes()) != digest:
-            return f"{name} differs from its checksum"
-    return ""
+            return record, f"{name} differs from its checksum"
+    return record, ""
 
 
 def _read(job: Job, status: str, message: str, path: Path) -> Run:
