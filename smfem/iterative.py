@@ -29,6 +29,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
+from cases import x3_points
+
 from . import laws, woodbury
 from .coupling import StackedOperator
 from .linalg import factorize_spd
@@ -110,7 +112,9 @@ class BlockIterative:
         self.tol, self.max_iter = model.case.params["tol"], options.max_iterations
         self.c = c = Constants.of(dt)
         self.op = StackedOperator(model)
-        self.points = SamplePoints(model, options.x3_oversampling, options.x3_min_points)
+        self.x3_rule = (options.x3_oversampling, "set") if options.x3_oversampling is not None else \
+            x3_points.oversampling(model.case.name, model.case.params.get("harmonics", 0))
+        self.points = SamplePoints(model, self.x3_rule[0], options.x3_min_points)
         S = model.systems
         self.offsets = model.offsets
         self.Q = np.concatenate([s.Q for s in S])
@@ -176,7 +180,8 @@ class BlockIterative:
         """Nothing to watch between steps."""
 
     def report(self) -> tuple[str, dict]:
-        facts = {"n_x3_points": len(self.points.x3), "time_breakdown_s": dict(self.timings)}
+        facts = {"n_x3_points": len(self.points.x3), "x3_oversampling": self.x3_rule[0], "x3_rule": self.x3_rule[1],
+                 "time_breakdown_s": dict(self.timings)}
         if self.kind == "matrix-free":
             facts["krylov_iterations"] = self.krylov_iterations
         return "", facts

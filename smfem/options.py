@@ -34,11 +34,11 @@ class SolverOptions:
     direct_max_nonzeros : the largest coupled system (nonzeros of ``K + a0 M``) factorized whole
         under ``'auto'``
     x3_oversampling : stress sample points along x3, in multiples of the fewest that integrate
-        the kept modes exactly (:mod:`smfem.sampling`)
-    x3_min_points : the fewest stress points along x3 over the modes' fundamental domain: with
-        few harmonics the exact count leaves plastic zones coarse along x3 (the notched
-        cylinder's zone at 6 ms, 40 harmonics, refine 2: area 1.57 on 66 points, 1.71 ... 1.92
-        on 128 ... 198, 1.83 / 1.86 / 1.83 on 264 / 330 / 396; the reference's 1.92)
+        the kept modes exactly (:mod:`smfem.sampling`); None: the multiple measured for the scene
+        and harmonic count (:mod:`cases.x3_points`: the plastic-zone area within 1 % of twice
+        as many points), else 1
+    x3_min_points : the fewest stress points along x3 over the modes' fundamental domain, on
+        top of that (0: no floor)
     layer_points_per_harmonic : contact-layer points around the circumference per harmonic kept
         (2 integrate the products of harmonics exactly; the edge of a contact zone needs more,
         benchmarks/README.md)
@@ -50,8 +50,8 @@ class SolverOptions:
     relaxation: float = 1.0
     max_iterations: int = 200
     direct_max_nonzeros: int = 40_000_000
-    x3_oversampling: float = 1.0
-    x3_min_points: int = 256
+    x3_oversampling: float | None = None
+    x3_min_points: int = 0
     layer_points_per_harmonic: int = 8
     max_state_iterations: int = 60
 
@@ -59,5 +59,5 @@ class SolverOptions:
         if self.iteration_matrix not in ("auto", "coupled", "matrix-free", "sor"):
             raise ValueError(f"iteration_matrix={self.iteration_matrix!r}: 'auto', 'coupled', 'matrix-free' or 'sor'")
 
-        if self.x3_oversampling < 1.0:
+        if self.x3_oversampling is not None and self.x3_oversampling < 1.0:
             raise ValueError(f"x3_oversampling={self.x3_oversampling}: at least 1 (fewer points are not exact)")

@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from cases import get_case
@@ -192,7 +193,7 @@ def test_more_stress_points_along_x3_change_the_probes_little():
     harmonics, 50 steps, 62 against 186 points): mid_uz 9e-5, peps_top 1.1e-3, peps_notch (on
     the notch line, where the hinge localizes) 9e-3 of their largest values."""
     case = get_case("notched_strip", {"harmonics": 40, "t_end": 1.6e-4, "tol": 1e-10})
-    one, three = (solve(case, SolverOptions(x3_oversampling=o, x3_min_points=0), with_fields=False) for o in (1.0, 3.0))
+    one, three = (solve(case, SolverOptions(x3_oversampling=o), with_fields=False) for o in (1.0, 3.0))
     assert three.info["n_x3_points"] >= 3 * one.info["n_x3_points"] - 3
     for name, h in three.history.items():
         tol = 2e-4 if name == "mid_uz" else 2e-2
@@ -214,12 +215,24 @@ def test_the_return_map_touches_only_the_points_that_yield():
     assert return_map_rows(calm, alpha, mu, 2.9e8, 0.0)[0] is calm
 
 
-def test_few_harmonics_get_at_least_the_floor_of_stress_points():
-    """The exact count of x3 points shrinks with the harmonics; SolverOptions.x3_min_points
-    keeps plastic zones resolved along x3 (why: its docstring)."""
+def test_the_stress_points_along_x3_are_the_measured_multiple_of_the_exact_count():
+    """cases/x3_points.csv (benchmarks/x3_points.py --write) holds, per plastic scene and
+    harmonic count, the multiple of the exact count whose plastic-zone area one more doubling
+    moves by at most 1 %; a plastic run takes it (the nearest measured count otherwise), a scene
+    without a row the exact count, and an explicit x3_oversampling wins."""
+    from cases import x3_points
     from smfem.sampling import SamplePoints
 
-    model = Model(get_case("notched_cylinder", {"harmonics": 20}), nonlinear=True)
-    assert len(SamplePoints(model, 1.0).x3) < 64 <= 256 <= len(SamplePoints(model, 1.0, at_least=256).x3) < 260
-    r = solve(get_case("notched_cylinder", {"harmonics": 20, "t_end": 1e-3}), with_fields=False)
-    assert r.info["n_x3_points"] >= SolverOptions().x3_min_points
+    table = pd.read_csv(x3_points.TABLE)
+    assert (table.area_change_pct <= 100 * x3_points.AREA_TOLERANCE).all()  # every row met the rule
+    assert set(table.factor) <= {1, 2, 4, 8, 16} and (table.points >= table.exact_points).all()
+    row = table[(table.scene == "notched_cylinder") & (table.harmonics == 40)].iloc[0]
+    model = Model(get_case("notched_cylinder", {"harmonics": 40}), nonlinear=True)
+    assert len(SamplePoints(model, 1.0).x3) == row.exact_points
+    r = solve(get_case("notched_cylinder", {"harmonics": 40, "t_end": 1e-4}), with_fields=False)
+    assert r.info["n_x3_points"] == row.points and r.info["x3_oversampling"] == row.factor
+    assert x3_points.oversampling("notched_cylinder", 41)[0] == row.factor  # nearest measured count
+    assert x3_points.oversampling("no such scene", 40)[0] == 1.0
+    r = solve(get_case("notched_cylinder", {"harmonics": 40, "t_end": 1e-4}), SolverOptions(x3_oversampling=1.0),
+              with_fields=False)
+    assert r.info["n_x3_points"] == row.exact_points
