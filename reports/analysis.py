@@ -15,6 +15,8 @@ from cases import get_case
 
 from studies import effectivity, metrics
 from studies.jobs import NOT_AVAILABLE, OK
+from runs.registry import SMFEM, lookup
+
 from studies.plan import series_solvers
 from .references import best_history, published_points
 from studies.study import CaseRuns
@@ -81,6 +83,16 @@ class CaseAnalysis:
     def truth_uncertainty(self) -> float:
         """The truth's uncertainty in the headline measure (NaN without a truth)."""
         return self.uncertainty_of("headline")
+
+    def smfem_costs(self, family: str = "headline") -> dict | None:
+        """Per target, SMFEM's cost with its best element there (the cheapest of the SMFEM
+        family's series, :func:`studies.metrics.cheapest`): what the other solvers' speed-ups
+        are measured against; None where no SMFEM series ran."""
+        mine = [s for name, s in self.solvers.items() if lookup(name).family == SMFEM and s.status == OK]
+        if not mine:
+            return None
+        costs = [s.costs if family == "headline" else s.family_costs[family] for s in mine]
+        return {t: metrics.cheapest(c[t] for c in costs) for t in costs[0]}
 
     def probes_of(self, family: str) -> list[str]:
         return [p.name for p in self.case.probes if family_of(p) == family]

@@ -8,6 +8,7 @@ from pathlib import Path
 import pandas as pd
 
 from runs.estimate import headline
+from runs.registry import lookup
 
 from studies import metrics
 from .analysis import FAMILIES, HEADLINE_MEASURE, CaseAnalysis
@@ -57,7 +58,7 @@ def effectivity_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
 
 
 #: the run parameters that place a run on a work-precision front
-SETTINGS = ("refine", "coarsen", "harmonics", "dt", "dim")
+SETTINGS = ("refine", "coarsen", "harmonics", "dt", "dim", "element")
 
 
 def fronts_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
@@ -89,8 +90,9 @@ def inside_model(validity: dict | None) -> str:
 
 def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | None,
                   no_truth: str | None = None) -> dict:
-    """CPU time to each target (with its settings) and SMFEM's speed-up there; ``no_truth``:
-    why the probes have no truth although the case has one."""
+    """CPU time to each target (with its settings) and SMFEM's speed-up there (against
+    ``mine``, SMFEM's best element at each target; none on SMFEM's own rows); ``no_truth``: why
+    the probes have no truth although the case has one."""
     row = {}
     for k, (target, cost) in enumerate(costs.items()):
         if s.status != OK:  # the reason once, in the first target's cell, without the solver's name
@@ -102,7 +104,7 @@ def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | No
         row[f"cpu_s_to_{_pct(target)}"] = text
     for target, cost in costs.items():
         speed = ""
-        if solver != SMFEM and s.status == OK and mine is not None:
+        if lookup(solver).family != SMFEM and s.status == OK and mine is not None:
             speed = metrics.speedup(cost, mine[target])
         row[f"smfem_speedup_{_pct(target)}"] = speed
     return row
@@ -113,8 +115,7 @@ def headline_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     (and settings) of the cheapest run reaching each target, and SMFEM's speed-up there."""
     rows = []
     for an in analyses:
-        mine = an.solvers.get(SMFEM)
-        mine = mine.costs if mine is not None and mine.status == OK else None
+        mine = an.smfem_costs()
         truth = an.truth.name if an.truth is not None else "none available"
         for solver, s in an.solvers.items():
             if s.status == NOT_INSTALLED:  # named in the case's section, not a row
@@ -135,8 +136,7 @@ def families_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
             probes = an.probes_of(family)
             if not probes:
                 continue
-            mine = an.solvers.get(SMFEM)
-            mine = mine.family_costs[family] if mine is not None and mine.status == OK else None
+            mine = an.smfem_costs(family)
             u = an.uncertainty_of(family)
             no_truth = None if math.isfinite(u) else "no converged truth: singular probes (truth.csv says why)"
             for solver, s in an.solvers.items():
@@ -223,7 +223,7 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "  run's error estimate and its parts, its actual error against the truth and effectivity = estimate /\n"
         f"  actual (where the actual error exceeds {metrics.TRUTH_MARGIN:g} truth uncertainties); honest within "
         f"[{BAND[0]:g}, {BAND[1]:g}]\n"
-        "fronts.csv: per run with a total error, its settings (refine, coarsen, harmonics, dt, dim), CPU, total\n"
+        "fronts.csv: per run with a total error, its settings (refine, coarsen, harmonics, dt, dim, element), CPU, total\n"
         "  error (headline measure), on_front and the key of the truth it was measured against; smfem report\n"
         "  --store-fronts keeps it with the stored truths (truths/CASE/front.csv), where smfem run --tol starts\n")
     return tables

@@ -4,6 +4,7 @@ layers ask about it (the ``dim`` it fixes, the packages that key its cached runs
 run, how the report draws it). Adding a solver is one :func:`register` call.
 
 The names are the ones the studies and ``summary.json`` use: ``smfem``, ``reference-2d``,
+``smfem-quad9`` (SMFEM with its quadratic section element, ``element=quad9``),
 ``reference-3d`` (the reference FEM with ``dim`` set), ``reference`` (the reference at the
 case's own ``dim``), ``reference-modal`` (the reference's harmonic model, exact in time) and
 ``calculix`` (CalculiX on the reference mesh, at the case's ``dim``; needs ``ccx`` on PATH) and
@@ -21,6 +22,8 @@ from cases.result import RunResult
 
 SMFEM, REFERENCE, REF2D, REF3D, MODAL = "smfem", "reference", "reference-2d", "reference-3d", "reference-modal"
 CALCULIX, EXPLICIT = "calculix", "reference-explicit"
+#: SMFEM with the 9-node section element (:mod:`smfem.quad9`): a study's series of its own
+SMFEM_QUAD9 = "smfem-quad9"
 
 #: what a solver can run (:attr:`Solver.supports`): the synthesized 3-D field of the last step
 #: (``fields``), that field every N steps (``frames``, a time series), plasticity, a rigid wall
@@ -41,6 +44,9 @@ class Solver:
         workers run it
     family : the name ``summary.json`` gives (default ``name``)
     dim : the reference ``dim`` the name fixes (None: the case's own)
+    fixes : other case parameters the name fixes, ``(key, value)`` pairs (SMFEM's quadratic
+        element: ``(("element", "quad9"),)``): a series of its own in a study, with the same
+        numerics as its family's entry
     packages : the packages whose sources decide its results besides ``cases`` and ``runs``
         (a change to them reruns its cached runs, :func:`studies.cache.code_version`)
     supports : of :data:`EVERYTHING`. :func:`solve` refuses ``forces`` where it is missing (the
@@ -70,6 +76,7 @@ class Solver:
     run: Callable[..., RunResult]
     family: str = ""
     dim: int | None = None
+    fixes: tuple = ()
     packages: tuple[str, ...] = ("reference_fem",)
     supports: frozenset = EVERYTHING
     label: str = ""
@@ -93,6 +100,11 @@ class Solver:
         object.__setattr__(self, "family", self.family or self.name)
         object.__setattr__(self, "label", self.label or self.name)
         object.__setattr__(self, "prose", self.prose or self.label)
+
+    @property
+    def fixed(self) -> dict:
+        """The case parameters the name fixes (``dim`` and :attr:`fixes`)."""
+        return ({} if self.dim is None else {"dim": self.dim}) | dict(self.fixes)
 
     @property
     def style(self) -> dict:
@@ -133,24 +145,27 @@ def _entry(solver: str | Solver) -> Solver:
     return solver if isinstance(solver, Solver) else lookup(solver)
 
 
-def with_dim(solver: str | Solver, case):
-    """``case`` with the ``dim`` the solver fixes (unchanged for the others)."""
-    dim = _entry(solver).dim
-    if dim is None or case.params.get("dim") == dim:
+def with_fixed(solver: str | Solver, case):
+    """``case`` with the parameters the solver fixes (:attr:`Solver.fixed`; unchanged where it
+    fixes none or the case has them)."""
+    fixed = _entry(solver).fixed
+    if all(case.params.get(k) == v for k, v in fixed.items()):
         return case
     from cases import rebuild
 
-    return rebuild(case, {"dim": dim})
+    return rebuild(case, fixed)
 
 
 def named_for(solver: str, case) -> str:
-    """The name of the entry that runs ``case`` as ``solver`` does with its ``dim`` fixed
-    (``reference`` at dim 3: ``reference-3d``; ``solver`` where no entry of its family fixes it)."""
+    """The name of the entry that runs ``case`` as ``solver`` does with its parameters fixed
+    (``reference`` at dim 3: ``reference-3d``; ``smfem`` with ``element=quad9``: ``smfem-quad9``;
+    ``solver`` where no entry of its family fixes them)."""
     entry = lookup(solver)
-    if entry.dim is not None:
+    if entry.fixed:
         return entry.name
-    dim = case.params.get("dim", 2)
-    return next((s.name for s in _TABLE.values() if s.family == entry.family and s.dim == dim), entry.name)
+    params = {"dim": 2} | case.params
+    return next((s.name for s in _TABLE.values() if s.family == entry.family and s.fixed
+                 and all(params.get(k) == v for k, v in s.fixed.items())), entry.name)
 
 
 def checks(solver: str | Solver) -> dict:
@@ -173,7 +188,7 @@ def solve(solver: str | Solver, case, progress: Callable[[int, int], None] | Non
     dict of keyword arguments of its ``solve`` (``grading``; the explicit one also
     ``step_divisor``)."""
     entry = _entry(solver)
-    case = with_dim(entry, case)
+    case = with_fixed(entry, case)
     if FORCES not in entry.supports and (case.forces or case.variation):
         from cases import UnsupportedCase
 
@@ -254,6 +269,10 @@ _ON_A_MESH = dict(run=_reference, family=REFERENCE, estimated=True, options=_ref
                   checks=_reference_checks)  # the reference FEM, by dim
 register(Solver(SMFEM, _smfem, packages=("smfem",), label="SMFEM", color="C0", marker="o", harmonics=True,
                 estimated=True, options=_smfem_options, make_options=_smfem_make_options, checks=_smfem_checks))
+register(Solver(SMFEM_QUAD9, _smfem, fixes=(("element", "quad9"),), family=SMFEM, packages=("smfem",),
+                label="SMFEM quad9", color="C3", marker="*", prose="SMFEM with the quadratic element", harmonics=True,
+                estimated=True, command_line=False, options=_smfem_options, make_options=_smfem_make_options,
+                checks=_smfem_checks))
 register(Solver(REFERENCE, **_ON_A_MESH, label="reference FEM", color="C1", marker="s", series=False))
 register(Solver(REF2D, **_ON_A_MESH, dim=2, label="reference FEM 2D", color="C1", marker="s",
                 prose="the 2D reference", command_line=False))

@@ -30,7 +30,7 @@ class Job:
     """A case with overrides, run by one solver (a name of :mod:`runs.registry`'s table).
 
     ``overrides`` is a sorted tuple of ``(key, value)`` so that a job can be hashed, with the
-    ``dim`` the solver fixes; ``fields`` asks a solver that writes fields (SMFEM's, in a study)
+    parameters the solver fixes (its ``dim``, SMFEM's quadratic ``element``); ``fields`` asks a solver that writes fields (SMFEM's, in a study)
     for ``fields.vtu`` and its time series ``fields.pvd`` (and plastic zones, which plastic runs
     always draw); ``options`` (sorted ``(key, value)`` too) are the solver's
     own options (:func:`runs.registry.solve`), part of the run's identity.
@@ -45,8 +45,8 @@ class Job:
     @classmethod
     def make(cls, case: str, solver: str, overrides: dict, fields: bool = False, options: dict | None = None) -> Job:
         entry = lookup(solver)
-        if entry.dim is not None:  # in the parameters, so the run's record says how it ran
-            overrides = dict(overrides, dim=entry.dim)
+        # in the parameters, so the run's record says how it ran
+        overrides = dict(overrides, **entry.fixed)
         return cls(case, solver, tuple(sorted(overrides.items())), fields and FIELDS in entry.supports,
                    tuple(sorted((options or {}).items())))
 

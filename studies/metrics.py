@@ -136,6 +136,17 @@ def cost_to(target: float, cpu, err, labels, truth_uncertainty: float = 0.0) -> 
     return Cost(target, NOT_REACHED, max(c for c, _, _ in runs), "", best)
 
 
+def cheapest(costs) -> Cost:
+    """The best of several series' costs to one target (SMFEM's elements): the cheapest that
+    reaches it, else the one that came closest, else the first."""
+    costs = list(costs)
+    reached = [c for c in costs if c.how == REACHED]
+    if reached:
+        return min(reached, key=lambda c: c.cpu)
+    missed = [c for c in costs if c.how == NOT_REACHED]
+    return min(missed, key=lambda c: c.best) if missed else costs[0]
+
+
 def speedup(reference: Cost, smfem: Cost) -> str:
     """``reference / smfem`` CPU time to the same target, as a value or a bound (``> x``: the
     reference does not reach it even at its dearest run; ``< x``: SMFEM does not)."""

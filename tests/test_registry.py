@@ -17,7 +17,7 @@ from reports import figures
 from reports.build import build
 from studies.plan import MODAL_TRUTH, REF2D, SMFEM, CaseStudy, Series, TruthPlan
 from runs import registry
-from runs.registry import CALCULIX, CONTACT, PLASTICITY, REF3D, REFERENCE, Solver, lookup, solvers
+from runs.registry import CALCULIX, CONTACT, PLASTICITY, REF3D, REFERENCE, SMFEM_QUAD9, Solver, lookup, solvers
 
 COARSE = "reference-coarse"
 
@@ -63,10 +63,26 @@ def test_a_registered_solver_runs_through_a_study_into_its_tables_and_figures(co
 
 def test_the_toy_solver_is_gone_after_its_test():
     assert COARSE not in [s.name for s in solvers()]
-    with pytest.raises(ValueError, match=f"unknown solver '{COARSE}': choose one of smfem, reference"):
+    with pytest.raises(ValueError, match=f"unknown solver '{COARSE}': choose one of smfem, smfem-quad9, reference"):
         lookup(COARSE)
     with pytest.raises(ValueError, match="unknown solver"):
         Series(COARSE, ({},))
+
+
+def test_smfem_with_the_quadratic_element_is_a_series_of_its_own():
+    """The quadratic element's entry fixes the case's element as the 3-D reference fixes dim:
+    in the job's parameters (so its cached runs and records say so), in the case it runs, and
+    as the entry a quad9 case is named by (``smfem run --tol`` reads its front)."""
+    from studies.jobs import Job
+
+    job = Job.make("dome", SMFEM_QUAD9, {"refine": 2})
+    assert dict(job.overrides) == {"refine": 2, "element": "quad9"}
+    assert job.resolved.params["element"] == "quad9"
+    assert registry.with_fixed(SMFEM_QUAD9, get_case("dome")).params["element"] == "quad9"
+    assert registry.named_for(SMFEM, get_case("dome", {"element": "quad9"})) == SMFEM_QUAD9
+    assert registry.named_for(SMFEM, get_case("dome")) == SMFEM
+    assert registry.named_for(REFERENCE, get_case("dome", {"dim": 3})) == REF3D
+    assert lookup(SMFEM_QUAD9).family == SMFEM and Job.make("dome", SMFEM, {}).overrides == ()
 
 
 def test_a_name_is_registered_once():
@@ -77,7 +93,7 @@ def test_a_name_is_registered_once():
 def test_the_table_keeps_the_reports_styles_labels_and_choices():
     """Today's figures: the four solvers of a study drawn as before the table."""
     drawn = {s.name: (s.color, s.marker, s.label) for s in solvers() if s.series}
-    assert drawn == {SMFEM: ("C0", "o", "SMFEM"), REF2D: ("C1", "s", "reference FEM 2D"),
+    assert drawn == {SMFEM: ("C0", "o", "SMFEM"), SMFEM_QUAD9: ("C3", "*", "SMFEM quad9"), REF2D: ("C1", "s", "reference FEM 2D"),
                      REF3D: ("C2", "^", "reference FEM 3D"), CALCULIX: ("C4", "D", "CalculiX 2D")}
     assert [s.name for s in solvers() if s.command_line] == [SMFEM, REFERENCE, CALCULIX, "reference-explicit"]
     assert {s.name: s.dim for s in solvers() if s.dim} == {REF2D: 2, REF3D: 3}
