@@ -10,6 +10,7 @@ the trigonometric products of the harmonics kept.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -26,6 +27,15 @@ def gauss_points_needed(omega: float) -> int:
     return max(8, int(math.ceil(omega / 2 + 5.5 * omega ** (1 / 3))) + 1)
 
 
+@functools.lru_cache(maxsize=64)
+def leggauss(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre points and weights on [-1, 1], kept: numpy's Newton polish of hundreds of
+    points costs milliseconds, and every model of a run (its companions too) asks again."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    x.flags.writeable = w.flags.writeable = False
+    return x, w
+
+
 def gauss_pieces(edges: np.ndarray, top_k: float, oversampling: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Points and weights of Gauss-Legendre rules on the pieces between consecutive ``edges``,
     each exact for functions of x3 up to the wavenumber ``top_k``; ``oversampling`` times as many
@@ -33,7 +43,7 @@ def gauss_pieces(edges: np.ndarray, top_k: float, oversampling: float = 1.0) -> 
     points, weights = [], []
     for a, b in zip(edges[:-1], edges[1:]):
         n = int(math.ceil(oversampling * gauss_points_needed(top_k * (b - a) / 2)))
-        x, w = np.polynomial.legendre.leggauss(n)
+        x, w = leggauss(n)
         points.append(0.5 * (b - a) * x + 0.5 * (a + b))
         weights.append(0.5 * (b - a) * w)
     return np.concatenate(points), np.concatenate(weights)

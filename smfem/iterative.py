@@ -147,11 +147,21 @@ class BlockIterative:
         self.timings = {"synthesis": 0.0, "stress": 0.0, "projection": 0.0, "solves": 0.0}
 
     @property
+    def peps_sampled(self) -> np.ndarray:
+        """Plastic strain intensity sqrt(2/3 eps_p : eps_p) at the sample points only (the
+        fundamental domain along x3), (ne, section points, n_x3); :attr:`peps_images` maps
+        :attr:`peps_x3` onto them."""
+        return self.law.equivalent_plastic_strain(self.state.law).reshape(self.points.point_shape[1:])
+
+    @property
+    def peps_images(self) -> np.ndarray:
+        """For each point of :attr:`peps_x3`, the sample point it is an image of."""
+        return self.points.images[1]
+
+    @property
     def peps(self) -> np.ndarray:
-        """Plastic strain intensity sqrt(2/3 eps_p : eps_p) at the points over the whole x3
-        range (:attr:`peps_x3`), (ne, section points, n)."""
-        peps = self.law.equivalent_plastic_strain(self.state.law)
-        return self.points.unfolded(peps.reshape(self.points.point_shape[1:]))[1]
+        """:attr:`peps_sampled` over the whole x3 range (:attr:`peps_x3`), (ne, section points, n)."""
+        return self.points.unfolded(self.peps_sampled)[1]
 
     @property
     def relaxed(self) -> np.ndarray:

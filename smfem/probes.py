@@ -63,7 +63,10 @@ class PlasticStrainProbes:
     between the two nearest x3 points; ``max`` is the maximum over every sample point.
     """
 
-    def __init__(self, model, probes, x3: np.ndarray):
+    def __init__(self, model, probes, x3: np.ndarray, images: np.ndarray | None = None):
+        """``x3``: the points along the whole range; ``images``: the sample point each is an
+        image of (:meth:`evaluate` then takes the sample points only: no unfolding per step)."""
+        images = np.arange(len(x3)) if images is None else images
         self.names = [p.name for p in probes]
         self.targets = []
         period = 2 * np.pi if model.body == "ring" else model.length
@@ -80,17 +83,18 @@ class PlasticStrainProbes:
             k = int(np.clip(np.searchsorted(at, x), 1, len(at) - 1))
             lam = float(np.clip((x - at[k - 1]) / (at[k] - at[k - 1]), 0.0, 1.0))
             k = (k - 1) % len(x3) if ring else k  # index into x3 of the upper neighbour
-            self.targets.append((e, wg, k, lam))
+            self.targets.append((e, wg, images[k - 1], images[k], lam))  # k - 1 = -1 wraps
 
     def evaluate(self, peps: np.ndarray) -> np.ndarray:
-        """Probe values from the plastic strain at the points (n_elements, section points, n_x3)."""
+        """Probe values from the plastic strain at the sample points (n_elements, section
+        points, n_x3): the maximum over them is the maximum over all their images."""
         out = []
         for target in self.targets:
             if target is None:
                 out.append(peps.max())
                 continue
-            e, wg, k, lam = target
-            out.append(wg @ ((1 - lam) * peps[e, :, k - 1] + lam * peps[e, :, k]))  # k - 1 = -1 wraps
+            e, wg, below, above, lam = target
+            out.append(wg @ ((1 - lam) * peps[e, :, below] + lam * peps[e, :, above]))
         return np.array(out)
 
 
@@ -153,7 +157,7 @@ class CaseProbes:
         self.points = ProbeSet(model, linear)
         self.plastic = None
         if plastic and hasattr(system, "peps"):
-            self.plastic = PlasticStrainProbes(model, plastic, system.peps_x3)
+            self.plastic = PlasticStrainProbes(model, plastic, system.peps_x3, system.peps_images)
         self.names = list(case.probe_names)
         self.columns = []
         for q in case.probes:
@@ -173,6 +177,6 @@ class CaseProbes:
         point = self.points.evaluate(state.u, state.v)
         if self.only_points:  # the common case, once per step: no per-probe dispatch
             return point
-        plastic = self.plastic.evaluate(system.peps) if self.plastic else ()
+        plastic = self.plastic.evaluate(system.peps_sampled) if self.plastic else ()
         return np.array([point[i] if kind == "point" else plastic[i] if kind == "plastic"
                          else getattr(system, i)(state) for kind, i in self.columns])
