@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from cases import get_case, parse_sets
+from runs.registry import REFERENCE, SMFEM
 
 from .usage import add_sets, check_writable
 
@@ -27,7 +28,9 @@ def command(args) -> int:
     check_writable(out)
     from reports.compare import compare
 
-    table = compare(s_case, r_case, out)
+    table, cpu = compare(s_case, r_case, out)
     print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    print(f"CPU time (one BLAS thread each): SMFEM {cpu[SMFEM]:.3g} s, reference {cpu[REFERENCE]:.3g} s; "
+          f"SMFEM / reference = {cpu[SMFEM] / cpu[REFERENCE]:.3g}")
     print(f"-> {out}")
     return 0

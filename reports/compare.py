@@ -55,8 +55,9 @@ def _histories_figure(case, s, r, path: Path) -> None:
     save(fig, path)
 
 
-def compare(smfem_case, reference_case, out: Path, progress=None) -> pd.DataFrame:
-    """Run both solvers, write their files and the comparison into ``out``; return the table."""
+def compare(smfem_case, reference_case, out: Path, progress=None) -> tuple[pd.DataFrame, dict]:
+    """Run both solvers, write their files and the comparison into ``out``; return the table
+    and each solver's CPU time (s, by solver name; model building and time stepping)."""
     results = {}
     for label, case in ((SMFEM, smfem_case), (REFERENCE, reference_case)):
         wall0 = time.perf_counter()
@@ -69,4 +70,4 @@ def compare(smfem_case, reference_case, out: Path, progress=None) -> pd.DataFram
     if s.snapshots and r.snapshots:
         plastic_zones({"SMFEM": s.snapshots, "reference FEM": r.snapshots}, out / "plastic_zones.png",
                       f"{smfem_case.name}: plastic zones (equivalent plastic strain >= 0.1 %)", smfem_case)
-    return table
+    return table, {label: result.cpu_time_s for label, result in results.items()}

@@ -1,5 +1,6 @@
 """``smfem compare``: both solvers' runs, the comparison table and the plastic zones side by side."""
 
+import json
 import numpy as np
 import pandas as pd
 import pytest
@@ -31,4 +32,7 @@ def test_compare_writes_both_runs_the_table_and_zones_side_by_side(tmp_path, cap
     with Image.open(tmp_path / "plastic_zones.png") as im:
         width, height = im.size
     assert height > 0.8 * width  # two rows of panels: SMFEM above the reference
-    assert "peps_max" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "peps_max" in out
+    cpu = {s: json.loads((tmp_path / s / "summary.json").read_text())["cpu_time_s"] for s in ("smfem", "reference")}
+    assert f"SMFEM / reference = {cpu['smfem'] / cpu['reference']:.3g}" in out
