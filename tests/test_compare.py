@@ -1,6 +1,7 @@
 """``smfem compare``: both solvers' runs, the comparison table and the plastic zones side by side."""
 
 import json
+
 import numpy as np
 import pandas as pd
 import pytest
