@@ -144,6 +144,7 @@ class BlockIterative:
         self.law = laws.get(model.case.material, factor)
         self.state = PointState(self.law.initial_state(n_points), np.zeros((6, n_points)))
         self.loads = np.zeros_like(self.Q)  # the committed additional loads F_p
+        self.loads_before = self.loads
         self.timings = {"synthesis": 0.0, "stress": 0.0, "projection": 0.0, "solves": 0.0}
 
     @property
@@ -184,6 +185,7 @@ class BlockIterative:
         return force / self.op.M_h
 
     def commit(self, u: np.ndarray) -> None:
+        self.loads_before = self.loads
         self.state, self.loads = self.pending
 
     def observe(self, state) -> None:
@@ -222,7 +224,9 @@ class BlockIterative:
         tick, pts, state = time.perf_counter, self.points, self.state
         self.Q_now = self.load(t)
         anderson = Anderson(self.memory) if self.memory else None
-        x, loads = u, self.loads
+        # the plastic loads extrapolated from the last two steps: a closer start (strip: 5.8 -> 5.0
+        # iterations per step); the iterations recompute them from the state, so only the start moves
+        x, loads = u, 2 * self.loads - self.loads_before
         for iteration in range(1, self.max_iter + 1):
             t0 = tick()
             dx = self.correction(x, predicted, loads)
