@@ -40,7 +40,10 @@ def render_field(vtu: Path, png: Path, title: str, length_unit: str) -> Path:
     clim = (float(values.min()), float(values.max()) or 1.0)
     plotter = pv.Plotter(off_screen=True, window_size=(900, 640))
     plotter.add_mesh(warped, scalars=scalars, cmap="viridis", clim=clim, show_edges=False, show_scalar_bar=False)
-    plotter.add_mesh(mesh.extract_feature_edges(), color="gray", line_width=0.5, opacity=0.4)
+    # the outline from the surface with coincident points merged: a ring's cells on the axis
+    # (each station's own copy of an axis node) would otherwise draw feature edges around it
+    outline = mesh.extract_surface(algorithm="dataset_surface").clean().extract_feature_edges()
+    plotter.add_mesh(outline, color="gray", line_width=0.5, opacity=0.4)
     plotter.view_vector((0.45, -0.9, 1.0))  # from above and aside: rings here are thin in z
     image = _cropped(plotter.screenshot(return_img=True))
     plotter.close()

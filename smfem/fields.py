@@ -12,45 +12,57 @@ from cases.geometry import RING
 from . import fourier, inhomogeneity
 from .assembly import element_dofs
 
+#: meshio's cell type per section mesh order (VTK_HEXAHEDRON = 12, VTK_TRIQUADRATIC_HEXAHEDRON = 29)
+HEX_TYPE = {1: "hexahedron", 2: "hexahedron27"}
+#: per section mesh order, each VTK hexahedron node's section node (in the element's node order,
+#: :class:`smfem.mesh.SectionMesh`) and station (0 bottom ... order top, along x3). Order 2 is
+#: VTK's triquadratic hexahedron: the bottom and top faces' corners (0-3, 4-7) and mid-sides
+#: (8-11, 12-15), the middle station's corners (16-19), its mid-sides on the faces xi = 0, xi = 1,
+#: eta = 0, eta = 1 (20-23: the section's mid-sides 3-0, 1-2, 0-1, 2-3), then the bottom, top and
+#: middle centres (24-26); tests/test_quad_element.py checks it against VTK's parametric coordinates
+HEX_NODES = {1: (np.array([0, 1, 2, 3] * 2), np.repeat([0, 1], 4)),
+             2: (np.array([0, 1, 2, 3] * 2 + [4, 5, 6, 7] * 2 + [0, 1, 2, 3] + [7, 5, 4, 6] + [8] * 3),
+                 np.array([0] * 4 + [2] * 4 + [0] * 4 + [2] * 4 + [1] * 8 + [0, 2, 1]))}
+
 
 def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: np.ndarray | None = None,
                peps_x3: np.ndarray | None = None, v_modes: list[np.ndarray] | None = None,
                relaxed: np.ndarray | None = None) -> meshio.Mesh:
-    """Hexahedral 3-D mesh (8-node cells on the section elements' corners) with the synthesized displacement (and, given ``v_modes``, velocity)
+    """Hexahedral 3-D mesh with the synthesized displacement (and, given ``v_modes``, velocity)
     as cartesian point data, and each cell's stress (cartesian tensor, 9 components) as cell
     data: the elastic stress of the amplitudes at the element's centre and the cell's middle
     along x3, less ``relaxed`` (the plastic strains' share, (6, n_elements, n_x3_points) at
     ``peps_x3``, from the nearest point).
 
     Ring: ``n_x3`` sectors around the axis (default 72); prism: ``n_x3`` slices along the span
-    (default 60). Cartesian axes as in :mod:`cases.geometry`. With ``peps`` (the plastic strain
-    at the sample points, (n_elements, section points, n_x3_points), at ``peps_x3`` along x3) each cell
-    also carries the element's mean over its section points at the x3 point nearest to the cell's middle.
+    (default 60). A 4-node section element gives 8-node hexahedra between neighbouring
+    stations along x3; a 9-node one (``mesh.order == 2``) 27-node ones (VTK's triquadratic
+    hexahedron) with a station in the middle of each cell as well, so that a viewer draws the
+    curved edges (:data:`HEX_NODES`). Cartesian axes as in :mod:`cases.geometry`. With ``peps``
+    (the plastic strain at the sample points, (n_elements, section points, n_x3_points), at
+    ``peps_x3`` along x3) each cell also carries the element's mean over its section points at
+    the x3 point nearest to the cell's middle.
     ``solid`` (cell data, 0/1) is 0 in the cut-outs, whose fictitious material the field carries.
     """
     mesh, body = model.mesh, model.body
     ring = body == RING
     n_x3 = n_x3 or (72 if ring else 60)
-    x3 = np.linspace(0.0, 2 * math.pi if ring else model.length, n_x3 + (0 if ring else 1), endpoint=not ring)
+    order = mesh.order
+    x3 = np.linspace(0.0, 2 * math.pi if ring else model.length, order * n_x3 + (0 if ring else 1),
+                     endpoint=not ring)  # the stations
     shape = (len(x3), mesh.n_nodes)
     x1, x2 = np.broadcast_to(mesh.x[:, 0], shape), np.broadcast_to(mesh.x[:, 1], shape)
     X3 = np.broadcast_to(x3[:, None], shape)
-    if ring:
-        points = np.stack([x1 * np.cos(X3), x1 * np.sin(X3), x2], axis=-1)
-        nxt = (np.arange(n_x3) + 1) % n_x3
-    else:
-        points = np.stack([X3, x1, x2], axis=-1)
-        nxt = np.arange(1, len(x3))
+    points = np.stack([x1 * np.cos(X3), x1 * np.sin(X3), x2] if ring else [X3, x1, x2], axis=-1)
     point_data = {"displacement": _cartesian(model, u_modes, x3).reshape(-1, 3)}
     if v_modes is not None:
         point_data["velocity"] = _cartesian(model, v_modes, x3).reshape(-1, 3)
-    here = np.arange(len(nxt))
-    n = mesh.n_nodes
-    # the corners only: a 9-node element's cell is the hexahedron of its corner nodes (its other
-    # nodes are points of the file that no cell uses; their values are exact there)
-    e = mesh.elements[:, :4]
-    hexes = np.concatenate([e[None] + (here * n)[:, None, None], e[None] + (nxt * n)[:, None, None]], axis=2)
-    middle = x3[here] + 0.5 * ((x3[nxt] - x3[here]) % (2 * math.pi if ring else np.inf))
+    section_node, level = HEX_NODES[order]
+    # each cell's stations along x3, bottom to top: a ring's last cell closes on station 0
+    stations = (order * np.arange(n_x3)[:, None] + np.arange(order + 1)) % len(x3)  # (n_x3, order + 1)
+    hexes = stations[:, None, level] * mesh.n_nodes + mesh.elements[None, :, section_node]
+    here, top = stations[:, 0], stations[:, -1]
+    middle = x3[here] + 0.5 * ((x3[top] - x3[here]) % (2 * math.pi if ring else np.inf))
     local = _elastic_stress(model, u_modes, middle)  # (n_cells along x3, ne, 6)
     nearest = None if peps_x3 is None else np.abs(peps_x3[None, :] - middle[:, None]).argmin(axis=1)
     if relaxed is not None:
@@ -60,7 +72,7 @@ def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: 
                  "solid": [(inhomogeneity.element_factor(model.case, mesh, middle).T == 1.0).astype(np.uint8).ravel()]}
     if peps is not None:
         cell_data["peps"] = [peps.mean(axis=1)[:, nearest].T.ravel()]
-    return meshio.Mesh(points.reshape(-1, 3), [("hexahedron", hexes.reshape(-1, 8))],
+    return meshio.Mesh(points.reshape(-1, 3), [(HEX_TYPE[order], hexes.reshape(-1, len(level)))],
                        point_data=point_data, cell_data=cell_data)
 
 

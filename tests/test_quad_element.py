@@ -161,12 +161,118 @@ def test_the_plastic_thick_cylinder_runs_and_agrees_with_the_reference_better_th
     assert quad.converged and reference_error(quad, reference) < 0.5 * reference_error(moment, reference)
 
 
-def test_fields_are_written_on_the_corner_hexahedra():
-    case = get_case("thick_cylinder", {"refine": 1})
-    run = solve(with_element(case, QUAD9))
-    cells = run.mesh.cells_dict["hexahedron"]
+def vtk_parametric_coords(order: int) -> np.ndarray:
+    """VTK's own parametric coordinates (n_nodes, 3) of its hexahedron's nodes (order 1) or
+    its triquadratic hexahedron's (order 2), in [0, 1]."""
+    from vtkmodules.vtkCommonDataModel import vtkHexahedron, vtkTriQuadraticHexahedron
+
+    cell = vtkHexahedron() if order == 1 else vtkTriQuadraticHexahedron()
+    return np.array(cell.GetParametricCoords()[:3 * cell.GetNumberOfPoints()]).reshape(-1, 3)
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_the_field_cells_have_vtks_node_order(order):
+    """Each node of a field cell (:data:`smfem.fields.HEX_NODES`: its section node's local
+    coordinates and its station along x3) sits at VTK's own parametric coordinates of that node."""
+    from smfem.fields import HEX_NODES
+    from smfem.quad9 import NODE_I, NODE_J
+
+    section_node, level = HEX_NODES[order]
+    ours = np.column_stack([NODE_I[section_node] / 2, NODE_J[section_node] / 2, level / order])
+    assert np.array_equal(ours, vtk_parametric_coords(order))
+
+
+def isoparametric_volume(points: np.ndarray, cells: np.ndarray) -> float:
+    """The signed volume of triquadratic hexahedra ``cells`` (n, 27): 3 x 3 x 3 Gauss points on
+    VTK's own shape functions."""
+    from vtkmodules.vtkCommonDataModel import vtkTriQuadraticHexahedron
+
+    from smfem.quad9 import GAUSS_1D, WEIGHTS_1D
+
+    gauss = np.stack(np.meshgrid(*[0.5 + GAUSS_1D] * 3, indexing="ij"), axis=-1).reshape(-1, 3)
+    weight = np.einsum("i,j,k->ijk", WEIGHTS_1D, WEIGHTS_1D, WEIGHTS_1D).ravel()
+    derivatives = []
+    for p in gauss:
+        d = [0.0] * 81
+        vtkTriQuadraticHexahedron.InterpolationDerivs(list(p), d)
+        derivatives.append(np.reshape(d, (3, 27)))
+    J = np.einsum("gan,cni->cgai", np.array(derivatives), points[cells])
+    return float((np.linalg.det(J) * weight).sum())
+
+
+def test_a_quad9_run_writes_triquadratic_hexahedra_that_hold_the_curved_body(tmp_path):
+    """``smfem run dome --set element=quad9`` writes 27-node cells, in fields.vtu and in the
+    frames of fields.pvd, and pyvista reads them. The dome is a spherical shell, curved in the
+    section and around the axis; measured against its exact volume at 1 x 5 elements: VTK's own
+    cell volumes (``compute_cell_sizes``, which splits a triquadratic cell into 8 linear ones)
+    -8.6e-4, the cells' corner hexahedra (what the field had before) -3.4e-3, the isoparametric
+    volume of the 27-node cells (VTK's shape functions) -3.6e-7. A ring's cells, bottom face counter-clockwise in (r, z) and top at
+    the next angle, are left-handed: their volumes are negative."""
+    import pyvista as pv
+
+    from cli import main
+    from runs.files import read_run
+
+    case = get_case("dome", {"coarsen": 4})  # 1 x 5 elements
+    sets = ["element=quad9", "coarsen=4", f"t_end={2 * case.dt}"]
+    assert main(["run", "dome", *(a for s in sets for a in ("--set", s)), "--every", "1", "--out", str(tmp_path),
+                 "--quiet", "--estimate", "off"]) == 0
+    run, _ = read_run(tmp_path)
+    n_cells = 72 * Model(case, element=QUAD9).mesh.n_elements
+    for mesh in [run.mesh] + [frame for _, frame in run.frames]:
+        assert [(block.type, block.data.shape) for block in mesh.cells] == [("hexahedron27", (n_cells, 27))]
+    assert len(run.frames) == 3
+    (inner, outer), (_, opening) = case.section.s.span, case.section.t.span
+    exact = 2 * np.pi / 3 * (outer ** 3 - inner ** 3) * (1 - np.cos(opening))
+    field = pv.read(tmp_path / "fields.vtu")
+    assert field.n_cells == n_cells and set(field.celltypes) == {pv.CellType.TRIQUADRATIC_HEXAHEDRON}
+    cells = run.mesh.cells[0].data
+    corners = pv.UnstructuredGrid({pv.CellType.HEXAHEDRON: cells[:, :8]}, run.mesh.points)
+    error_vtk = -field.compute_cell_sizes()["Volume"].sum() / exact - 1
+    error_corners = -corners.compute_cell_sizes()["Volume"].sum() / exact - 1
+    error_isoparametric = -isoparametric_volume(run.mesh.points, cells) / exact - 1
+    assert abs(error_vtk) < 0.3 * abs(error_corners) and abs(error_isoparametric) < 1e-6
+
+
+@pytest.mark.parametrize("name", ["thick_cylinder", "strip"])
+def test_the_field_cells_stations_carry_the_synthesized_displacement(name):
+    """A 27-node cell's nodes lie at its bottom, middle and top stations along x3 (a ring's last
+    sector closing on the first station), and the field's displacement at the middle station's
+    nodes is the synthesis there: the probes' (:class:`smfem.probes.ProbeSet`) at the node's
+    position, for random amplitudes of every harmonic. Each node's station is VTK's (its third
+    parametric coordinate), not the field's own table."""
+    from cases.geometry import Probe
+    from smfem.fields import field_mesh
+    from smfem.probes import ProbeSet
+
+    case = with_element(strip_case(1) if name == "strip" else get_case(name), QUAD9)
     model = Model(case, element=QUAD9)
-    assert cells.shape == (72 * model.mesh.n_elements, 8) and np.isfinite(run.mesh.point_data["displacement"]).all()
+    rng = np.random.default_rng(1)
+    u_modes = [rng.standard_normal(s.T.shape[1]) for s in model.systems]
+    n_x3, ne = 4, model.mesh.n_elements
+    field = field_mesh(model, u_modes, n_x3=n_x3)
+    ring = model.body == RING
+    period = 2 * np.pi if ring else model.length
+    zeta = vtk_parametric_coords(2)[:, 2]  # 0, 1/2, 1: bottom, middle, top
+    chosen = np.array([0, n_x3 * ne - 1])  # the first sector's (slice's) first cell, the last one's last
+    nodes = field.cells[0].data[chosen]  # (2, 27)
+    x = field.points[nodes]
+    if ring:  # (r, z), theta
+        section = np.stack([np.hypot(x[..., 0], x[..., 1]), x[..., 2]], axis=-1)
+        x3 = np.arctan2(x[..., 1], x[..., 0])
+    else:  # (x1, x2), x3
+        section, x3 = x[..., 1:], x[..., 0]
+    expected = (chosen[:, None] // ne + zeta) * period / n_x3
+    off = x3 - expected
+    assert np.abs((off + period / 2) % period - period / 2 if ring else off).max() < 1e-12
+    middle = zeta == 0.5
+    probes = [Probe(f"u{c}", "point", "u", (c,), (*p, at)) for p, at in
+              zip(section[:, middle].reshape(-1, 2), expected[:, middle].ravel()) for c in (1, 2, 3)]
+    u1, u2, u3 = ProbeSet(model, probes).evaluate(np.concatenate(u_modes), None).reshape(-1, 3).T
+    c, s = np.cos(expected[:, middle].ravel()), np.sin(expected[:, middle].ravel())
+    synthesized = np.column_stack([u1 * c - u3 * s, u1 * s + u3 * c, u2] if ring else [u3, u1, u2])
+    written = field.point_data["displacement"][nodes[:, middle]].reshape(-1, 3)
+    assert np.abs(written - synthesized).max() < 1e-10 * np.abs(synthesized).max()
 
 
 def test_the_contact_layer_refuses_a_nine_node_body():
