@@ -1,9 +1,9 @@
 """Contact layer (paper (17)-(19)): thin special elements between a face and a rigid wall.
 
 One layer element sits on every segment of the face ``case.wall.edge``; its far face is the
-wall (fixed). The layer is built with the same moment-scheme formulas as any element; only its
-elasticity ``D`` depends on the state, held at each of the layer's points (two Gauss points
-along the face per layer element, times the points along x3, the circumference) and
+wall (fixed). The layer is built with the same formulas as the body's elements (below); only
+its elasticity ``D`` depends on the state, held at each of the layer's points (the Gauss points
+along the face of every layer element, times the points along x3, the circumference) and
 re-evaluated inside the iterations of a step:
 
 * open (the layer would carry normal tension): ``D = 0``;
@@ -15,11 +15,33 @@ re-evaluated inside the iterations of a step:
   direction turns with the tangential strain, as in a return mapping), so the iterations are
   Newton's; where they still cycle they are damped (:meth:`ContactSystem.solve`).
 
-Two points per layer element, not one at its centre: with the moment scheme's gradient terms
-in the stiffness and the state taken at the centre, closing an element could pull its centre
-open (the switch is not monotone), and a point at the edge of the contact zone flipped between
-open and closed for ever (seen on the tilted wall). At the Gauss points the layer's energy is a
-sum of point terms, convex without friction.
+States at the Gauss points along the face, not one at an element's centre: with the moment
+scheme's gradient terms in the stiffness and the state taken at the centre, closing an element
+could pull its centre open (the switch is not monotone), and a point at the edge of the contact
+zone flipped between open and closed for ever (seen on the tilted wall). At the Gauss points
+the layer's energy is a sum of point terms with positive weights, convex without friction.
+
+The layer element follows the face's segments (:meth:`smfem.mesh.SectionMesh.edge_segments`):
+
+* 2-node segments (a 4-node body): the moment scheme's 4-node element, its points the 2 Gauss
+  points along the face (:func:`moment_layer`);
+* 3-node segments, corner-mid-corner (a 9-node body, ``quad9``): a 6-node element, quadratic
+  along the face with the face's own functions and linear across the layer, its strain taken
+  at mid-thickness at 3 Gauss points along the face, in the face's frame there
+  (:func:`quadratic_layer`). 3 points, not 2: they integrate the products of the quadratics
+  (times r) exactly on a straight face; 2 would leave a face pattern that no point feels.
+
+Why not two straight 2-node facets per 3-node segment (corner-mid, mid-corner), which would
+leave the layer as it is: its stiffness would not match the face it holds. A uniform closure
+of linear facets loads the face 1:2:1 per segment, where a uniform traction on the quadratic
+face is 1:4:1 (``int N_i ds``, the 9-node element's consistent loads). The layer is far stiffer
+than the face (E_l / h = 2.1e15 Pa/m against E over a node spacing, ~4e13), so the face
+settles where the two balance and the facets' pressure swings from node to node: on the rod
+impact -100 ... -345 MPa along the face and the axis corner open through the whole impact
+(end_uz 8 times off), where this layer gives a smooth -186 ... -228 MPa and a closed face. The
+mean pressure, the rod's histories and the cost hardly differ (benchmarks/README.md). The
+lumped masses do not decide it: the face is massless either way (:func:`face_free_mass`;
+quad9's mid-side mass, 4 times a corner's, moves one node row in with the rest).
 
 Only the traction rows of the layer (normal strain, the two tangential shears) carry stress:
 the layer's own membrane stiffness would otherwise add a spurious tangential restraint.
@@ -46,10 +68,11 @@ import scipy.sparse as sp
 
 from cases.geometry import RING
 
-from . import element, fourier
-from .element import GAUSS_A
+from . import element, fourier, quad9
+from .element import GAUSS_A, strain_operator, strain_rotation
 from .fourier import Mode
 from .linalg import factorize_spd
+from .loads import segment_shape_functions
 from .model import ModelError
 from .newmark import Constants, State, StepFailed
 from .options import SolverOptions
@@ -144,6 +167,91 @@ def slip_after(strain: np.ndarray, states: LayerStates, sigma: np.ndarray, slip:
     return np.where((states.kind == OPEN)[..., None], strain[..., SHEAR], slip)
 
 
+# -- the layer elements' geometry: points along the face, their strain operators -------------
+class LayerPoints(NamedTuple):
+    """The layer's points in the section, ``m`` face nodes per layer element.
+
+    ``element`` (n_points,): the layer element (face segment) of each point; ``columns`` (m,):
+    the segment's nodes in the order of ``B``'s columns; ``B`` (n_modes, n_points, 6, 3 m): the
+    strain rows in the point's frame (t1 along the face, t2 across the layer, x3) of each mode
+    from the face nodes' dofs (the wall's are fixed); ``weight`` (n_points,): the layer volume
+    per radian each point stands for (times r); ``r`` (n_points,): its radius on the face.
+    """
+
+    element: np.ndarray
+    columns: np.ndarray
+    B: np.ndarray
+    weight: np.ndarray
+    r: np.ndarray
+
+
+def segment_normals(x_seg: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """(n_seg, nodes, 2) unit normals of the face segments ``x_seg`` (n_seg, nodes, 2) at their
+    nodes, pointing away from their elements' ``centres`` (n_seg, 2): towards the wall."""
+    nodes = x_seg.shape[1]
+    _, dL = segment_shape_functions(nodes, np.linspace(0.0, 1.0, nodes))  # [at node, function]
+    tangent = np.einsum("jn,ena->eja", dL, x_seg)
+    normal = np.stack([tangent[..., 1], -tangent[..., 0]], axis=-1)
+    normal /= np.linalg.norm(normal, axis=-1, keepdims=True)
+    inward = centres - x_seg.mean(axis=1)
+    return normal * -np.sign(np.einsum("eja,ea->ej", normal, inward))[..., None]
+
+
+def moment_layer(x_seg: np.ndarray, wall_seg: np.ndarray, wavenumbers) -> LayerPoints:
+    """4-node moment-scheme layer elements on 2-node face segments (a 4-node body's face).
+
+    Two points per element, the Gauss points along the face: the layer's stresses vary only
+    along it, and ``a^2 = 1/12`` makes their mean of ``B' D B`` the moment scheme's stiffness.
+    """
+    # xi along the face, eta from the wall to the face
+    X = np.stack([wall_seg[:, 0], wall_seg[:, 1], x_seg[:, 1], x_seg[:, 0]], axis=1)
+    ops = element.operators(X, RING, 0.0)
+    n_e = len(x_seg)
+    elements_of = np.repeat(np.arange(n_e), 2)
+    xi = np.tile([-GAUSS_A, GAUSS_A], n_e)
+    B = np.stack([(B0[elements_of] + xi[:, None, None] * B1[elements_of])[..., 6:]
+                  for B0, B1, _ in (ops.at(p) for p in wavenumbers)])  # local nodes 2, 3: the face
+    r0, r1 = x_seg[:, 0, 0], x_seg[:, 1, 0]
+    r = 0.5 * (r0 + r1)[elements_of] + xi * (r1 - r0)[elements_of]
+    return LayerPoints(elements_of, np.array([1, 0]), B, 0.5 * ops.sqrt_g[elements_of], r)
+
+
+def layer6_shape_functions(xi, eta):
+    """6-node layer element, quadratic along the face (``xi``), linear across the layer
+    (``eta``): ``N (.., 6)``, ``dN/dxi``, ``dN/deta``, the wall's 3 nodes (eta = -1/2) first."""
+    L, dL = quad9.lagrange_1d(xi)
+    eta = np.asarray(eta)[..., None]
+    wall, face = 0.5 - eta, 0.5 + eta
+    return (np.concatenate([L * wall, L * face], axis=-1),
+            np.concatenate([dL * wall, dL * face], axis=-1),
+            np.concatenate([-L, L], axis=-1))
+
+
+def quadratic_layer(x_seg: np.ndarray, wall_seg: np.ndarray, wavenumbers) -> LayerPoints:
+    """6-node layer elements on 3-node face segments (a 9-node body's face): the face's own
+    quadratic interpolation, linear across the layer, its strain taken at mid-thickness at the 3
+    Gauss points along the face (exact for the products of quadratics on a straight face; 2
+    points would leave a face pattern that no point feels) in the frame of the face there."""
+    X = np.concatenate([wall_seg, x_seg], axis=1)  # (n_seg, 6, 2)
+    n_e, n_g = len(x_seg), len(quad9.GAUSS_1D)
+    B, weight, r = [], [], []
+    for g, xi in enumerate(quad9.GAUSS_1D):
+        N, dxi, deta = layer6_shape_functions(xi, 0.0)
+        t1, t2 = np.einsum("i,eia->ea", dxi, X), np.einsum("i,eia->ea", deta, X)
+        along = t1 / np.linalg.norm(t1, axis=1, keepdims=True)
+        across = np.column_stack([-along[:, 1], along[:, 0]])
+        frame = strain_rotation(np.stack([along, across], axis=1))
+        strains = (strain_operator(X, RING, p, xi, 0.0, layer6_shape_functions) for p in wavenumbers)
+        B.append([np.einsum("ers,esk->erk", frame, b)[..., 9:] for b in strains])  # the face's 3 nodes
+        area = np.abs(t1[:, 0] * t2[:, 1] - t1[:, 1] * t2[:, 0])
+        weight.append(area * (X[:, :, 0] @ N) * quad9.WEIGHTS_1D[g])
+        r.append(x_seg[:, :, 0] @ quad9.lagrange_1d(xi)[0])
+    # points element-major, as the moment layer's: element e's at e n_g ... e n_g + n_g - 1
+    B = np.stack(B, axis=2).reshape(len(wavenumbers), n_e * n_g, 6, 9)
+    return LayerPoints(np.repeat(np.arange(n_e), n_g), np.arange(3), B,
+                       np.stack(weight, axis=1).ravel(), np.stack(r, axis=1).ravel())
+
+
 class ContactError(StepFailed):
     """Contact states that do not settle, or a face pushed through the wall."""
 
@@ -159,9 +267,9 @@ class ContactLayer:
     points_per_harmonic : layer points around the circumference per harmonic kept
         (:class:`smfem.options.SolverOptions`)
 
-    Point arrays are shaped ``(n_points, n_x3, ...)``, two points (the Gauss points along the
-    face) per layer element; face displacements ``(n_modes, n_F)`` over the full dofs ``F`` of
-    the face nodes.
+    Point arrays are shaped ``(n_points, n_x3, ...)``, the Gauss points along the face of each
+    layer element (:class:`LayerPoints`: 2 on a 2-node face segment, 3 on a 3-node one); face
+    displacements ``(n_modes, n_F)`` over the full dofs ``F`` of the face nodes.
     """
 
     def __init__(self, model, thickness: float, stiffness: float, points_per_harmonic: int = 8):
@@ -170,8 +278,6 @@ class ContactLayer:
             raise ModelError(f"{case.name}: the contact layer is implemented for bodies of revolution only")
         if model.coupling:
             raise ModelError(f"{case.name}: contact with material varying along x3 (cut-outs) is not supported")
-        if model.mesh.order != 1:  # its layer elements are the moment scheme's, on 2-node face segments
-            raise ModelError(f"{case.name}: the contact layer needs a 4-node section element, not {model.element.name!r}")
         self.model, self.h, self.E, self.G = model, float(thickness), float(stiffness), 0.5 * float(stiffness)
         wall = case.wall
         self.f = float(wall.friction)
@@ -179,53 +285,45 @@ class ContactLayer:
         face = mesh.edge_nodes(wall.edge)
         seg, owner = mesh.edge_segments(wall.edge)
         x = mesh.x
-        tangent = x[seg[:, 1]] - x[seg[:, 0]]
-        normal = np.column_stack([tangent[:, 1], -tangent[:, 0]])
-        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-        inward = mesh.element_x()[owner].mean(axis=1) - 0.5 * (x[seg[:, 0]] + x[seg[:, 1]])
-        normal *= -np.sign(np.einsum("ea,ea->e", normal, inward))[:, None]  # outward, towards the wall
+        # the wall side of the layer: every face node moved by h along the face's outward
+        # normal there (the mean of its segments' normals at a shared corner)
+        row_of = np.full(mesh.n_nodes, -1)
+        row_of[face] = np.arange(len(face))
+        position = row_of[seg]  # (n_seg, nodes per segment): each segment node's place in face
+        normal = segment_normals(x[seg], mesh.element_x()[owner].mean(axis=1))
         out_node = np.zeros((len(face), 2))
-        np.add.at(out_node, seg, normal[:, None, :])
+        np.add.at(out_node, position, normal)
         out_node /= np.linalg.norm(out_node, axis=1, keepdims=True)
         wall_x = x[face] + self.h * out_node
-        where = {n: k for k, n in enumerate(face)}
-        a, b = np.array([where[n] for n in seg[:, 0]]), np.array([where[n] for n in seg[:, 1]])
-        X = np.stack([wall_x[a], wall_x[b], x[seg[:, 1]], x[seg[:, 0]]], axis=1)  # xi along the face
-        self.ops = element.operators(X, case.body, 0.0)
-        # the layer's points in its section: the 2 Gauss points along the face of each element
-        # (the layer's stresses vary only along the face; a^2 = 1/12 makes their mean of
-        # B' D B the moment scheme's stiffness), so each point's law is its own and the
-        # layer's energy a sum of point terms (convex without friction)
-        n_e = self.n_elements = len(seg)
-        self.element = np.repeat(np.arange(n_e), 2)
-        xi = np.tile([-GAUSS_A, GAUSS_A], n_e)
-        dofs = (3 * seg[:, ::-1, None] + np.arange(3)).reshape(n_e, 6)[self.element]  # local nodes 2, 3
-        self.F = np.unique(dofs)
-        self.local = np.searchsorted(self.F, dofs)  # (n_points, 6) positions in F
-        self.C = [s.T[self.F].tocsr() for s in model.systems]  # face dofs <- reduced, per mode
-        self.offsets = np.cumsum([0] + [s.T.shape[1] for s in model.systems])
-        # points along x3 and the basis of every mode and strain row there
         l_max = max(m.l for m in model.modes)
         if l_max == 0 and wall.slope:
             raise ModelError(f"{case.name}: a tilted wall (wall_slope > 0) makes the contact vary around "
                              f"the circumference: set harmonics >= 2")
+        build = moment_layer if mesh.order == 1 else quadratic_layer
+        points = build(x[seg], wall_x[position], [float(m.l) for m in model.modes])
+        self.n_elements, self.element, self.B = len(seg), points.element, points.B
+        nodes = seg[points.element][:, points.columns]  # (n_points, m) in the order of B's columns
+        dofs = (3 * nodes[:, :, None] + np.arange(3)).reshape(len(nodes), -1)
+        self.F = np.unique(dofs)
+        self.local = np.searchsorted(self.F, dofs)  # (n_points, 3 m) positions in F
+        self.C = [s.T[self.F].tocsr() for s in model.systems]  # face dofs <- reduced, per mode
+        self.offsets = np.cumsum([0] + [s.T.shape[1] for s in model.systems])
+        # points along x3 and the basis of every mode and strain row there
         n_x3 = 1 if l_max == 0 else points_per_harmonic * (l_max + 1)
         self.x3 = 2 * math.pi * np.arange(n_x3) / n_x3
         self.w = np.full(n_x3, 2 * math.pi / n_x3)
         self.psi = np.stack([np.where(fourier.ROW_TYPE == 0, *(v[:, None] for v in fourier.psi(m, self.x3, RING, 0.0)))
                              for m in model.modes])  # (n_modes, n_x3, 6)
-        B = [self.ops.at(float(m.l)) for m in model.modes]
-        self.B = np.stack([(B0[self.element] + xi[:, None, None] * B1[self.element])[..., 6:] for B0, B1, _ in B])
-        r = 0.5 * (x[seg[:, 0], 0] + x[seg[:, 1], 0])[self.element] + xi * (x[seg[:, 1], 0] - x[seg[:, 0], 0])[self.element]
-        self.gap = wall.gap_at(r[:, None] * np.cos(self.x3)[None, :], x[face, 0].max())  # (n_points, n_x3)
+        # (n_points, n_x3)
+        self.gap = wall.gap_at(points.r[:, None] * np.cos(self.x3)[None, :], x[face, 0].max())
         self.pre_closure = self.gap / self.h  # the gap as a normal pre-strain
-        self.area = 0.5 * self.ops.sqrt_g[self.element, None] * self.w[None, :]  # quadrature weight of every point
+        self.area = points.weight[:, None] * self.w[None, :]  # quadrature weight of every point
         shape = (len(self.element), n_x3)
         self.slip_strain = np.zeros(shape + (2,))  # committed tangential slip per point
         self.states = LayerStates(np.full(shape, OPEN), np.zeros(shape + (2,)), np.zeros(shape))
         # global rows/cols of every entry of the per-element face blocks, all mode pairs
         n_modes, nF = len(model.modes), len(self.F)
-        R = np.arange(n_modes)[:, None, None] * nF + self.local[None]  # (modes, n_points, 6)
+        R = np.arange(n_modes)[:, None, None] * nF + self.local[None]  # (modes, n_points, 3 m)
         self._rows = R.ravel()  # position in the stacked face vector of every point's dofs
         self._scatter = (R[:, None, :, :, None] * (n_modes * nF) + R[None, :, :, None, :]).ravel()
         self.size = n_modes * nF
@@ -305,8 +403,9 @@ def face_free_mass(model, edge: str, i: int = 0) -> np.ndarray:
     follows quasi-statically; the total mass is kept.
     """
     m = model.full_mass(i, i).reshape(-1, 3).copy()
-    ns, nt = model.mesh.shape
-    grid = np.arange(model.mesh.n_nodes).reshape(nt + 1, ns + 1)
+    mesh = model.mesh
+    ns, nt = mesh.shape
+    grid = np.arange(mesh.n_nodes).reshape(mesh.order * nt + 1, mesh.order * ns + 1)  # mid-sides too
     face, inside = {"s_min": (grid[:, 0], grid[:, 1]), "s_max": (grid[:, -1], grid[:, -2]),
                     "t_min": (grid[0], grid[1]), "t_max": (grid[-1], grid[-2])}[model.mesh.section.edge(edge)]
     m[inside] += m[face]

@@ -172,12 +172,17 @@ def strain_operator(X: np.ndarray, body: str, p: float, xi, eta, shape=shape_fun
     B[:, 4, :, 2], B[:, 5, :, 2] = G[:, :, 0], G[:, :, 1]
     Nn = np.broadcast_to(N, (n, nodes))
     if body == RING:
-        inv_r = 1.0 / np.einsum("ei,i->e", X[:, :, 0], N)[:, None]
-        B[:, 2, :, 0] = Nn * inv_r
-        B[:, 2, :, 2] = p * Nn * inv_r
-        B[:, 4, :, 2] -= Nn * inv_r
-        B[:, 4, :, 0] = -p * Nn * inv_r
-        B[:, 5, :, 1] = -p * Nn * inv_r
+        r = np.einsum("ei,i->e", X[:, :, 0], N)[:, None]
+        on_axis = r == 0
+        # on the axis N_i / r takes its limit dN_i / dr (l'Hopital): exact for the fields the
+        # axis regularity admits (smfem/constraints.py), whose numerators vanish there
+        inv_r = 1.0 / np.where(on_axis, 1.0, r)
+        hoop = lambda c: np.where(on_axis, c * G[:, :, 0], c * Nn * inv_r)  # c N_i / r
+        B[:, 2, :, 0] = hoop(1.0)
+        B[:, 2, :, 2] = hoop(p)
+        B[:, 4, :, 2] -= hoop(1.0)
+        B[:, 4, :, 0] = hoop(-p)
+        B[:, 5, :, 1] = hoop(-p)
     else:
         B[:, 2, :, 2] = -p * Nn
         B[:, 4, :, 0] = p * Nn
