@@ -229,6 +229,7 @@ class BlockIterative:
         x, loads = u, 2 * self.loads - self.loads_before
         for iteration in range(1, self.max_iter + 1):
             t0 = tick()
+            used = loads
             dx = self.correction(x, predicted, loads)
             x = x + dx if anderson is None else anderson.next(x, dx)
             t1 = tick()
@@ -250,7 +251,11 @@ class BlockIterative:
             if not (np.isfinite(change2) and np.isfinite(size2)):
                 raise NotConverged(f"step {step_index} (t = {t:.6g} s) diverged at iteration {iteration}: "
                                    f"the amplitudes are no longer finite")
-            if change2 <= self.tol**2 * max(size2, 1e-300):
+            # a direct solve (the coupled factorization, no Anderson mixing yet) with the loads
+            # that the state now gives back is the step's exact solution: no second iteration
+            # to confirm it (every elastic step: the thick cylinder's first 35 of 100)
+            exact = self.kind == "coupled" and iteration == 1 and (loads is used or np.array_equal(loads, used))
+            if exact or change2 <= self.tol**2 * max(size2, 1e-300):
                 self.pending = (PointState(law_state, relaxed), loads)
                 return x, iteration
         raise NotConverged(
