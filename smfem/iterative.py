@@ -138,6 +138,9 @@ class BlockIterative:
             o = self.offsets
             self.rows = [(sp.csr_matrix(K[o[i]:o[i + 1]]), sp.csr_matrix(c.a0 * M[o[i]:o[i + 1]])) for i in range(len(S))]
         self.factorizations = len(self.lus)
+        #: a correction solves the elastic system exactly: the coupled factorization, or a sweep of
+        #: blocks that do not couple (block Jacobi, unrelaxed)
+        self.exact_solve = self.kind == "coupled" or (self.kind == "sor" and not model.coupling and self.omega == 1.0)
         n_points = int(np.prod(self.points.point_shape[1:]))
         # the contrast material's stiffness is scaled with its factor
         factor = np.broadcast_to(self.points.factor[:, None, :], self.points.point_shape[1:]).ravel()
@@ -251,10 +254,10 @@ class BlockIterative:
             if not (np.isfinite(change2) and np.isfinite(size2)):
                 raise NotConverged(f"step {step_index} (t = {t:.6g} s) diverged at iteration {iteration}: "
                                    f"the amplitudes are no longer finite")
-            # a direct solve (the coupled factorization, no Anderson mixing yet) with the loads
+            # an exact solve (:attr:`exact_solve`; no Anderson mixing yet) with the loads
             # that the state now gives back is the step's exact solution: no second iteration
             # to confirm it (every elastic step: the thick cylinder's first 35 of 100)
-            exact = self.kind == "coupled" and iteration == 1 and (loads is used or np.array_equal(loads, used))
+            exact = self.exact_solve and iteration == 1 and (loads is used or np.array_equal(loads, used))
             if exact or change2 <= self.tol**2 * max(size2, 1e-300):
                 self.pending = (PointState(law_state, relaxed), loads)
                 return x, iteration
