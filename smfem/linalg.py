@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg as la
+from scipy.linalg.lapack import dpbtrs
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 from scipy.sparse.csgraph import reverse_cuthill_mckee
@@ -32,8 +33,13 @@ class BandedCholesky:
         self.factor, self.perm = la.cholesky_banded(band, check_finite=False), perm
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        x = np.empty_like(b, dtype=float)
-        x[self.perm] = la.cho_solve_banded((self.factor, False), b[self.perm], check_finite=False)
+        # LAPACK's dpbtrs directly: scipy's cho_solve_banded checks its arguments on every call,
+        # a third of a small section's solve (thick cylinder, 608 dof: 61 -> 41 us)
+        y, info = dpbtrs(self.factor, b[self.perm])
+        if info:
+            raise la.LinAlgError(f"dpbtrs: illegal argument {-info}")
+        x = np.empty_like(y)
+        x[self.perm] = y
         return x
 
 
