@@ -17,7 +17,7 @@ from reports.analysis import analyse
 from reports.build import build
 from studies.cache import Run, RunCache
 from studies.jobs import NOT_AVAILABLE, NOT_INSTALLED, Job, execute
-from studies.plan import CALCULIX, MODAL_TRUTH, REF2D, REF3D, SMFEM, TIME_TRUTH, CaseStudy, Series, TruthPlan, grid, quick
+from studies.plan import CALCULIX, MODAL_TRUTH, REF2D, REF3D, SMFEM, SMFEM_QUAD9, TIME_TRUTH, CaseStudy, Series, TruthPlan, grid, quick
 from reports.references import rod_histories
 from studies.study import CaseRuns
 from reports.tables import headline_table
@@ -441,6 +441,17 @@ def test_verdict_sentences_say_who_is_faster_and_why_no_claim():
     missed = rows((SMFEM, "not reached (best 5.5 %)", "not reached (best 5.5 %)", "", "", 5.5, 0.24),
                   (REF2D, "not reached (best 4.3 %)", "33.4 (r2)", "neither reaches it", "< 4.22x", 4.3, 0.24))
     assert sentence("nc", missed) == "nc: SMFEM does not reach 5 % in this study (best 5.5 %); the 2D reference in 33.4 s (r2) reaches it."
+    # two SMFEM elements: the cheaper one at a target speaks, the others are measured against it
+    both = rows((SMFEM, "0.255 (r4 H1)", "0.0382 (r2 H1)", "", "", 0.22, 0.04),
+                (SMFEM_QUAD9, "0.146 (r2 H1 quad9)", "0.05 (r1 H1 quad9)", "", "", 0.3, 0.04),
+                (REF2D, "0.267 (r2)", "0.0559 (r1)", "1.83x", "1.46x", 0.36, 0.04))
+    assert sentence("dome", both) == ("dome: SMFEM with the quadratic element reaches 1 % total error in 0.146 s CPU "
+                                      "(r2 H1 quad9): 1.83 times faster than the 2D reference.")
+    from cli.study import headline_lines
+
+    lines = headline_lines(both.reset_index().assign(case="dome"))
+    assert lines[0].startswith("dome   1 %: smfem-quad9 0.146 s CPU") and "reference-2d 1.83x" in lines[0]
+    assert lines[1].startswith("dome   5 %: smfem 0.0382 s CPU") and "smfem-quad9" not in lines[1]
 
 
 def _texts_outside(fig) -> list[str]:
