@@ -39,6 +39,15 @@ class ToolMissing(UnsupportedCase):
     """An optional external program a solver runs (CalculiX's ``ccx``) is not installed."""
 
 
+def newmark_only(case, solver: str) -> None:
+    """Refuse (:class:`UnsupportedCase`) a case whose ``time_scheme`` is not Newmark's: an
+    SMFEM option that ``solver``, with its own time integration, would otherwise ignore."""
+    scheme = case.params.get("time_scheme", "newmark")
+    if scheme != "newmark":
+        raise UnsupportedCase(f"{solver}: time_scheme={scheme} is SMFEM's option; this solver integrates in time "
+                              "its own way: leave time_scheme unset")
+
+
 @dataclass(frozen=True)
 class Spec:
     """Allowed values of one parameter: type, bounds (inclusive unless ``open_*``), choices."""
@@ -119,6 +128,11 @@ COMMON = {
     "element": Spec(str, choices=("moment4", "quad9"),
                     help="SMFEM's section element: the paper's moment-scheme quadrilateral (the default) or the "
                          "9-node quadratic (smfem/quad9.py)"),
+    # SMFEM's linear runs only, absent from every scene's defaults as element is
+    "time_scheme": Spec(str, choices=("newmark", "gauss"),
+                        help="SMFEM's time integration of an elastic run without contact: Newmark's average "
+                             "acceleration (the paper's, the default) or the 2-stage Gauss-Legendre method "
+                             "(order 4, smfem/gauss.py)"),
 }
 
 

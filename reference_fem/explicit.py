@@ -39,7 +39,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-from cases.params import UnsupportedCase
+from cases.params import UnsupportedCase, newmark_only
 from cases.result import RunResult
 
 from .face import plane_face
@@ -229,6 +229,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
 
     if step_divisor < 1:
         raise ValueError("step_divisor must be a positive integer")
+    newmark_only(case, "explicit reference")
     cpu0 = time.process_time()
     rmesh = build_mesh(case, grading)
     cpu_mesh = time.process_time() - cpu0

@@ -8,7 +8,7 @@ from typing import Callable
 import meshio
 import numpy as np
 
-from cases.params import UnsupportedCase
+from cases.params import UnsupportedCase, newmark_only
 from cases.recorder import StepRecorder
 from cases.result import RunResult
 
@@ -69,8 +69,10 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     ------
     cases.params.UnsupportedCase
         for scenes the reference solver cannot represent (a 2D form that does not exist for
-        the scene; contact with plasticity; a wall facing a face that is not plane).
+        the scene; contact with plasticity; a wall facing a face that is not plane; SMFEM's
+        ``time_scheme=gauss``).
     """
+    newmark_only(case, "reference solver")
     cpu0 = time.process_time()
     rmesh = build_mesh(case, grading)
     cpu_mesh = time.process_time() - cpu0

@@ -20,7 +20,8 @@ The companions are cheap next to the run:
   :data:`OBSERVED_RANGE`; where the three levels do not converge on a displacement or
   velocity probe (the notched strip's notch at 60 and 30 harmonics; a wave at four times the
   step), that part is measured against a finer companion instead (half the step, half as many
-  harmonics again) at the scheme's order (:data:`ORDERS`): the run and that companion are the
+  harmonics again) at the scheme's order (:data:`ORDERS`; in time 4 for SMFEM's opt-in
+  ``time_scheme=gauss``, :func:`order`): the run and that companion are the
   finest pair, and the pair the coarser ones were not. Where that part's safe reading (the
   lowest order, from its coarser pair) raises the run's estimate by little (:data:`NEGLIGIBLE`),
   it is kept: the finer companion would cost more than the run to lower a part that does not
@@ -49,11 +50,14 @@ from .registry import lookup, solve, solvers
 #: observes it: Newmark's average acceleration is second order in dt, both elements second order
 #: in h in the displacements, a patch load's Fourier series second order in the response
 ORDERS = {"space": 2.0, "harmonics": 2.0, "time": 2.0}
+#: the time order of SMFEM's opt-in scheme ``time_scheme=gauss`` (2-stage Gauss-Legendre)
+GAUSS_TIME_ORDER = 4.0
 #: space with a re-entrant corner (a cut-out) or a plastic hinge: first order (the explicit
 #: truth ladders observe 0.7 ... 1.1 on the notched cylinder)
 SINGULAR_SPACE_ORDER = 1.0
 #: observed orders are kept within these: below 1 a difference is not yet a convergence, above
-#: 2 neither scheme converges so fast, and the estimate must not shrink on a lucky cancellation
+#: 2 neither scheme converges so fast (in time: the scheme's order, :func:`order`), and the
+#: estimate must not shrink on a lucky cancellation
 OBSERVED_RANGE = (1.0, 2.0)
 #: a pre-asymptotic part whose safe reading (the lowest order, from its coarser pair) raises the
 #: run's estimated error (the largest over its displacement and velocity probes) by at most this
@@ -108,6 +112,14 @@ def space_order(case) -> float:
     return SINGULAR_SPACE_ORDER if case.cutouts or case.material.plastic else ORDERS["space"]
 
 
+def order(case, part: str) -> float:
+    """The order of ``part`` where no third level observes it (:data:`ORDERS`): in time the
+    scheme's, :data:`GAUSS_TIME_ORDER` for an SMFEM run with ``time_scheme=gauss``."""
+    if part == "time" and case.params.get("time_scheme") == "gauss":
+        return GAUSS_TIME_ORDER
+    return ORDERS[part]
+
+
 def space_ratio(fine, coarse) -> float:
     """How much finer the mesh of ``fine`` is than that of ``coarse``: the geometric mean over
     the section's refinable axes of the element-count ratios."""
@@ -134,12 +146,12 @@ def _differences(case, a, b) -> dict[str, float]:
             for name, values in a.history.items() if name in b.history}
 
 
-def observed_order(d_fine: float, d_coarse: float, ratio: float) -> float:
+def observed_order(d_fine: float, d_coarse: float, ratio: float, highest: float = OBSERVED_RANGE[1]) -> float:
     """The order two successive differences show, within :data:`OBSERVED_RANGE` (the range's
-    low end when they do not fall)."""
+    low end when they do not fall; ``highest``: the scheme's order where it exceeds the range)."""
     if not (d_fine > 0 and d_coarse > d_fine and ratio > 1):
         return OBSERVED_RANGE[0]
-    return float(np.clip(math.log(d_coarse / d_fine) / math.log(ratio), *OBSERVED_RANGE))
+    return float(np.clip(math.log(d_coarse / d_fine) / math.log(ratio), OBSERVED_RANGE[0], highest))
 
 
 def asymptotic(d_fine: float, d_coarse: float, ratio: float) -> bool:
@@ -225,14 +237,14 @@ def _parts(case, result, cases: dict, by_name: dict, diffs: dict, upward: dict) 
             ratio = _ratio(part, fine, coarse)
             finer = ratio < 1  # the companion is on the finer side
             if part in upward:
-                p = ORDERS[part]  # the finest pair: the scheme's order
+                p = order(case, part)  # the finest pair: the scheme's order
             elif part == "space":
                 p = space_order(case)
             elif f"{part}2" in by_name:
                 p = observed_order(diffs[part][name], diffs[f"{part}2"].get(name, math.nan),
-                                   _ratio(part, coarse, cases[f"{part}2"]))
+                                   _ratio(part, coarse, cases[f"{part}2"]), max(OBSERVED_RANGE[1], order(case, part)))
             else:
-                p = ORDERS[part]
+                p = order(case, part)
             d = diffs[measured].get(name, math.nan)
             # the run against a coarser companion: d / (r^p - 1); against a finer one: d / (1 - r^p)
             row[part] = d / (1.0 - ratio ** p) if finer else d / (ratio ** p - 1.0)

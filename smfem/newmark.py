@@ -105,9 +105,17 @@ class LinearSystem:
         self.K, self.load = K.tocsr(), Load(Q, terms)
         self.diagonal_mass = isinstance(M, np.ndarray) and M.ndim == 1
         self.M = M if self.diagonal_mass else sp.csr_matrix(M)
-        self.a0M = Constants.of(dt).a0 * self.M
-        self.lu = sla.splu((self.K + (sp.diags(self.a0M) if self.diagonal_mass else self.a0M)).tocsc())
+        self.lu = self.factorize(dt)
         self.factorizations = 1
+
+    def factorize(self, dt: float):
+        """The factorization of the step's matrix ``K + a0 M``."""
+        self.a0M = Constants.of(dt).a0 * self.M
+        return sla.splu((self.K + self.mass_matrix(self.a0M)).tocsc())
+
+    def mass_matrix(self, scaled_mass) -> sp.spmatrix:
+        """``scaled_mass`` (a multiple of ``M``, diagonal or sparse as ``M`` is) as a sparse matrix."""
+        return sp.diags(scaled_mass) if self.diagonal_mass else scaled_mass
 
     def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
         force = self.load(0.0) - self.K @ u0
@@ -128,5 +136,8 @@ class LinearSystem:
 
     def energy(self, u: np.ndarray, v: np.ndarray) -> tuple[float, float]:
         """Kinetic and strain energy ``(v'Mv/2, u'Ku/2)``."""
-        Mv = self.M * v if self.diagonal_mass else self.M @ v
-        return 0.5 * v @ Mv, 0.5 * u @ (self.K @ u)
+        return 0.5 * v @ self.mass_times(v), 0.5 * u @ (self.K @ u)
+
+    def mass_times(self, x: np.ndarray) -> np.ndarray:
+        """``M x`` (``x`` real or complex)."""
+        return self.M * x if self.diagonal_mass else self.M @ x

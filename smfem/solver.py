@@ -11,6 +11,9 @@ The solver chooses how to solve each step and names the choice in ``info['solve'
   coupling applied matrix-free and the diagonal blocks as preconditioner (or the paper's block
   SOR, on request);
 * a rigid wall: the contact layer (:mod:`smfem.contact`).
+
+Every one of them marches with Newmark (:mod:`smfem.newmark`); an elastic run without contact
+may take the 2-stage Gauss-Legendre method instead (``time_scheme=gauss``, :mod:`smfem.gauss`).
 """
 
 from __future__ import annotations
@@ -24,10 +27,11 @@ import scipy.sparse as sp
 from cases.recorder import StepRecorder
 from cases.result import RunResult
 
-from . import laws, woodbury
+from . import gauss, laws, woodbury
 from .contact import ContactSystem
 from .exact import error_l2
 from .fields import field_mesh
+from .gauss import GaussSystem
 from .iterative import BlockIterative
 from .model import Model, ModelError
 from .newmark import LinearSystem, StepFailed, march
@@ -80,6 +84,8 @@ def solve(case, options: SolverOptions | None = None, progress=None, with_fields
 def build_system(case, options: SolverOptions):
     """The model, the system that solves its steps, and the ``info['solve']`` that names it."""
     plastic = laws.get(case.material).nonlinear  # a law whose stress depends on its state: the iterations
+    if case.params.get("time_scheme", "newmark") == "gauss":
+        return gauss_system(case, options, plastic)
     if case.wall is not None:
         if plastic:
             raise ModelError(f"{case.name}: contact with plasticity is not supported: set plastic=false")
@@ -118,6 +124,25 @@ def build_system(case, options: SolverOptions):
                                  force_terms(case, model)), how
 
 
+def gauss_system(case, options: SolverOptions, plastic: bool):
+    """:func:`build_system` for ``time_scheme=gauss``: the linear system factorized whole, or a
+    :class:`ModelError` that says why not."""
+    refused = ("plasticity" if plastic else "a rigid wall" if case.wall is not None else
+               f"iteration_matrix={options.iteration_matrix}" if options.iteration_matrix not in ("auto", "coupled")
+               else "")
+    if refused:
+        raise ModelError(f"{case.name}: time_scheme=gauss takes an elastic run without contact, not {refused}: "
+                         "set time_scheme=newmark")
+    model = Model(case)
+    if model.coupling and model.coupled_nonzeros() > options.direct_max_nonzeros:
+        raise ModelError(f"{case.name}: time_scheme=gauss factorizes the coupled system whole, and its "
+                         f"{model.coupled_nonzeros()} nonzeros exceed direct_max_nonzeros: set time_scheme=newmark")
+    K, M, Q, _, _ = stacked(model)
+    how = "the 2-stage Gauss-Legendre method, " + ("the coupled block system" if model.coupling else
+                                                   "decoupled harmonics") + ", one complex factorization"
+    return model, GaussSystem(K, M, Q, case.dt, force_terms(case, model)), how
+
+
 def _field(model, system, state):
     """The synthesized 3-D field of a state: displacement, velocity, stress, plastic strain."""
     split = lambda x: np.split(x, model.offsets[1:-1])
@@ -138,7 +163,8 @@ def _run(case, model, system, how, progress, with_fields, cpu0, every=0) -> RunR
                             snapshot=snapshot)
     V0 = np.concatenate([s.V0 for s in model.systems])
     try:
-        for state in march(system, np.zeros_like(V0), V0, case.dt, case.n_steps):
+        steps = gauss.march if isinstance(system, GaussSystem) else march
+        for state in steps(system, np.zeros_like(V0), V0, case.dt, case.n_steps):
             row = probes.values(state, system)
             system.observe(state)
             recorder.record(state.n, row, state.iterations)

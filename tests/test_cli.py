@@ -53,6 +53,8 @@ def test_fields_carry_the_synthesized_probe_value(tmp_path):
         (["run", "dome", "--set", "dt"], "KEY=VALUE"),
         (["run", "dome", "--solver", "ansys"], "solver"),
         (["frobnicate"], "invalid choice"),
+        (["run", "thick_cylinder", "--set", "time_scheme=gauss", "--set", "plastic=true"], "time_scheme=gauss"),
+        (["run", "dome", "--solver", "reference", "--set", "time_scheme=gauss"], "time_scheme=gauss"),
     ],
 )
 def test_user_mistakes_exit_2_with_one_line_and_write_nothing(tmp_path, capsys, args, needle):

@@ -46,17 +46,17 @@ def test_coarsen_halves_the_paper_mesh():
         get_case("thick_cylinder", {"coarsen": 0})
 
 
-def _fake_solver(a=0.3, b=2e5, c=4.0):
+def _fake_solver(a=0.3, b=2e5, c=4.0, time_order=2):
     """A 'solver' whose error is known: a/N^2 in space (N: the section's elements along its
-    refinable axis), b dt^2 in time, c/H^2 in the harmonics."""
+    refinable axis), b dt^time_order in time, c/H^2 in the harmonics."""
     def run(solver, case):
         n = len(case.section.s.grid(case.mesh_scale)) - 1
         t = np.arange(0.0, 1e-3 + case.dt / 2, case.dt)
-        err = a / n ** 2 + b * case.dt ** 2 + c / case.harmonics ** 2
+        err = a / n ** 2 + b * case.dt ** time_order + c / case.harmonics ** 2
         hist = {p.name: np.sin(2e3 * t) * (1 + err) for p in case.probes}
         return SimpleNamespace(t=t, history=hist, cpu_time_s=0.01, converged=True, message="")
     return run, (lambda case: a / (len(case.section.s.grid(case.mesh_scale)) - 1) ** 2), \
-        (lambda case: b * case.dt ** 2), (lambda case: c / case.harmonics ** 2)
+        (lambda case: b * case.dt ** time_order), (lambda case: c / case.harmonics ** 2)
 
 
 def test_each_part_is_recovered_when_the_orders_hold():
@@ -72,6 +72,19 @@ def test_each_part_is_recovered_when_the_orders_hold():
         assert parts["total"] == pytest.approx(parts["space"] + parts["time"] + parts["harmonics"])
         assert parts["orders"] == pytest.approx({"space": 2.0, "time": 2.0, "harmonics": 2.0}, rel=0.05)  # observed
     assert est["companions_cpu_total_s"] == pytest.approx(0.05)
+
+
+def test_a_gauss_runs_time_part_is_read_at_the_schemes_order_4():
+    """time_scheme=gauss: the observed time order may reach 4 (Newmark's is kept within 2)."""
+    run, _, time, _ = _fake_solver(b=1e16, time_order=4)
+    settings = {"refine": 2, "dt": 1e-5, "t_end": 1e-3}
+    gauss = get_case("thick_cylinder", {**settings, "time_scheme": "gauss"})
+    est = E.estimate(gauss, SMFEM, run(SMFEM, gauss), run=run)
+    coarse = get_case("thick_cylinder", {**settings, "refine": 1})
+    for parts in est["probes"].values():
+        assert parts["orders"]["time"] == pytest.approx(4.0, rel=0.05)
+        assert parts["time"] == pytest.approx(time(coarse), rel=0.1)
+    assert E.order(gauss, "time") == 4.0 and E.order(coarse, "time") == 2.0
 
 
 def test_smfem_run_writes_its_estimate_and_prints_one_line(tmp_path, capsys):

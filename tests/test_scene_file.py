@@ -106,10 +106,11 @@ def test_set_and_rebuild_work_on_a_file_scene():
 
 
 def test_params_defaults_cover_the_common_keys():
-    # coarsen (an error estimate's companion) and element (SMFEM's section element) are
-    # overrides only: without a default, a case's params hold them only when set, and the
+    # coarsen (an error estimate's companion), element and time_scheme (SMFEM's section element
+    # and time integration) are overrides only: without a default, a case's params hold them only when set, and the
     # stored truths' keys stay as they were
-    assert set(REQUIRED) | set(OPTIONAL) == set(COMMON) - {"coarsen", "element"} and not set(REQUIRED) & set(OPTIONAL)
+    overrides_only = {"coarsen", "element", "time_scheme"}
+    assert set(REQUIRED) | set(OPTIONAL) == set(COMMON) - overrides_only and not set(REQUIRED) & set(OPTIONAL)
 
 
 @pytest.mark.parametrize("solver", ["smfem", "reference"])

@@ -27,7 +27,7 @@ from typing import Callable
 
 import numpy as np
 
-from cases.params import ToolMissing, UnsupportedCase
+from cases.params import ToolMissing, UnsupportedCase, newmark_only
 from cases.result import RunResult
 
 from ..frames import body_point_to_mesh, body_rotation
@@ -74,6 +74,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None,
     other solvers count theirs; making the deck and reading the results are not in it.
     ``workdir`` keeps ccx's files there (else a temporary directory).
     """
+    newmark_only(case, "calculix")
     ccx = find_ccx()
     if case.wall is not None:
         raise UnsupportedCase(WALL_REFUSED)
