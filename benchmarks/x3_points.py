@@ -70,7 +70,9 @@ def main(argv=None):
     args = ap.parse_args(argv)
     if args.tiny:
         case = get_case("thick_cylinder", {"plastic": True, "t_end": 5 * get_case("thick_cylinder").dt})
-        print("tiny:", zone_areas(case, 1)[1:], "points and CPU")
+        for factor in (1, 2):
+            _, points, cpu = zone_areas(case, factor)
+            print(f"tiny: {factor}x the exact count: {points} points, {cpu:.2f} s CPU")
         return
     rows = [calibrate(name, SCENES[name][0], h) for name in args.scenes for h in SCENES[name][1]]
     table = pd.DataFrame(rows)

@@ -48,7 +48,10 @@ def split_sets(items, solver: str) -> tuple[dict, dict]:
     ``SolverOptions``, or the reference's ``grading``: the names its table entry gives); an
     option's value may be a bare word (``iteration_matrix=sor``)."""
     mine = lookup(solver).options()
-    others = {name: s.name for s in solvers() for name in s.options() if name not in mine}
+    others = {}  # option -> the first solver (by family name) that takes it
+    for s in solvers():
+        for name in s.options() - mine:
+            others.setdefault(name, s.family)
     case_items, options = [], {}
     for item in items or ():
         key, sep, text = (part.strip() for part in item.partition("="))
