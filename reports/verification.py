@@ -31,7 +31,7 @@ import pandas as pd
 
 from cases import verification
 from cases.geometry import PRISM, RING
-from runs.registry import REF3D, SMFEM, solve
+from runs.registry import REF3D, SMFEM, lookup, solve
 
 #: the order each solver's scheme has in each parameter, for the table (space: in L2)
 THEORY = {(SMFEM, "space"): 2.0, (SMFEM, "time"): 2.0, (REF3D, "space"): 3.0, (REF3D, "time"): 2.0}
@@ -83,10 +83,8 @@ def plan(quick: bool = True) -> tuple[Ladder, ...]:
 def run_level(ladder: Ladder, level: dict) -> dict:
     """One level: the L2 error at the end, per probe its error against the exact motion and its
     end value, and the CPU."""
-    params = {**ladder.base, **level}
-    if ladder.solver == REF3D:
-        params["dim"] = 3
-    case = verification.build(ladder.body, params)
+    # the parameters the solver's name fixes (the 3D reference's dim, the quadratic element)
+    case = verification.build(ladder.body, {**ladder.base, **level, **lookup(ladder.solver).fixed})
     result = solve(ladder.solver, case)
     if not result.converged:
         raise RuntimeError(f"{case.name} ({ladder.solver}, {level}): {result.message}")
