@@ -130,7 +130,7 @@ def _solve(solver: str, case, title: str, quiet: bool, **options):
 
 
 #: parameters that choose the discretization, not the problem
-DISCRETIZATION = ("refine", "coarsen", "harmonics", "dt", "tol", "dim")
+DISCRETIZATION = ("refine", "coarsen", "harmonics", "dt", "tol", "dim", "element", "time_scheme")
 
 
 def parse_target(text: str) -> float:
@@ -179,7 +179,10 @@ def _front_start(case, truth, solver: str, target: float):
     front = read_front(case.name) if truth is not None else None
     if front is None:
         return None
-    rows = front[(front.solver == named_for(solver, case)) & front.total.notna()]
+    # the case's own time scheme only: the measured settings of another scheme do not carry over
+    scheme = front["time_scheme"].fillna("newmark") if "time_scheme" in front else "newmark"
+    rows = front[(front.solver == named_for(solver, case)) & front.total.notna()
+                 & (scheme == case.params.get("time_scheme", "newmark"))]
     if not len(rows):
         return None
     within = rows[rows.total <= target]

@@ -58,7 +58,7 @@ def effectivity_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
 
 
 #: the run parameters that place a run on a work-precision front
-SETTINGS = ("refine", "coarsen", "harmonics", "dt", "dim", "element")
+SETTINGS = ("refine", "coarsen", "harmonics", "dt", "dim", "element", "time_scheme")
 
 
 def fronts_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
@@ -223,7 +223,7 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "  run's error estimate and its parts, its actual error against the truth and effectivity = estimate /\n"
         f"  actual (where the actual error exceeds {metrics.TRUTH_MARGIN:g} truth uncertainties); honest within "
         f"[{BAND[0]:g}, {BAND[1]:g}]\n"
-        "fronts.csv: per run with a total error, its settings (refine, coarsen, harmonics, dt, dim, element), CPU, total\n"
+        "fronts.csv: per run with a total error, its settings (refine, coarsen, harmonics, dt, dim, element,\n  time_scheme), CPU, total\n"
         "  error (headline measure), on_front and the key of the truth it was measured against; smfem report\n"
         "  --store-fronts keeps it with the stored truths (truths/CASE/front.csv), where smfem run --tol starts\n")
     return tables
