@@ -74,18 +74,19 @@ def test_the_fully_integrated_element_runs_the_plastic_thick_cylinder():
     assert full.converged and history_error(full, moment) <= 1e-2
 
 
-def test_the_harmonic_coupling_is_exact_for_a_plugged_in_element():
-    """The notched strip with full4: the batched coupled blocks equal the element's own
-    stiffness pair by pair; K x through the cut-outs' x3 points, the forces of the elastic
-    stresses at the sample points and the Woodbury solves all agree with the assembled
-    coupled matrices."""
+@pytest.mark.parametrize("element", [FULL4.name, "quad9"])
+def test_the_harmonic_coupling_is_exact_for_a_plugged_in_element(element):
+    """The notched strip with full4 (a test's plug-in) and with quad9 (the 9-node element): the
+    batched coupled blocks equal the element's own stiffness pair by pair; K x through the
+    cut-outs' x3 points (the matrix-free path), the forces of the elastic stresses at the sample
+    points and the Woodbury solves all agree with the assembled coupled matrices."""
     from smfem import woodbury
     from smfem.coupling import StackedOperator
     from smfem.newmark import Constants
     from smfem.sampling import SamplePoints
 
     case = get_case("notched_strip", {"harmonics": 24})
-    model = Model(case, nonlinear=True, element=FULL4.name)
+    model = Model(case, nonlinear=True, element=element)
     K, M, _, _, _ = stacked(model)
     offsets = model.offsets
     i, j = model.coupling[0]
