@@ -123,6 +123,7 @@ class SamplePoints:
         self.images = self.symmetry.images(self.x3)  # fixed: probes unfold the points every step
         self.factor = inhomogeneity.element_factor(model.case, model.mesh, self.x3)  # (ne, n_x3)
         self.scale = self.factor[None, :, None, :]
+        self.homogeneous = bool(np.all(self.factor == 1.0))  # no contrast material: no scaling
         psi = np.array([fourier.psi(s.mode, self.x3, model.body, model.length) for s in model.systems])
         self.psi = psi.transpose(1, 0, 2).copy()  # (2, n_modes, n_x3): synthesis per row type
         self.psi_w = (psi * self.w).transpose(1, 2, 0).copy()  # (2, n_x3, n_modes): weighted projection
@@ -159,7 +160,8 @@ class SamplePoints:
         out = np.empty((6, a.shape[1], len(self.x3)))
         for t, rows in enumerate(ROWS):
             out[rows] = a[rows] @ self.psi[t]
-        return out.reshape(self.point_shape) * self.scale
+        out = out.reshape(self.point_shape)
+        return out if self.homogeneous else out * self.scale
 
     def forces(self, sigma: np.ndarray) -> np.ndarray:
         """Internal force amplitudes (14) of all modes, stacked, of stresses at the points."""
