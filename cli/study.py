@@ -3,7 +3,6 @@ work-precision; the report adds index.html and report.pdf (:mod:`reports.build`)
 
 from __future__ import annotations
 
-import re
 import sys
 from pathlib import Path
 
@@ -59,21 +58,22 @@ def command(args) -> int:
 def headline_lines(head) -> list[str]:
     """The headline in a few short lines (the whole table is tables/headline.csv): per case and
     target, SMFEM's cost with its cheaper element there and its speed-up over each other solver."""
-    from runs.registry import SMFEM, lookup
+    from reports.verdict import cheapest, split_smfem
 
     lines = []
     width = max((len(c) for c in head.case), default=0)
     for case, rows in head.groupby("case", sort=False):
-        rows = rows.set_index("solver")
-        mine = [s for s in rows.index if lookup(s).family == SMFEM]
+        mine, others_rows = split_smfem(rows.set_index("solver"))
         for column in (c for c in rows.columns if c.startswith("cpu_s_to_")):
             target = column.removeprefix("cpu_s_to_").replace("pct", " %")
-            cells = {s: str(rows.at[s, column]) for s in mine}
-            reached = [(float(m.group(1)), s) for s, c in cells.items() if (m := re.match(r"^([0-9.e+-]+) \(", c))]
-            best = min(reached)[1] if reached else (mine[0] if mine else "smfem")
-            cost = re.sub(r"^([0-9.e+-]+) \(", r"\1 s CPU (", cells.get(best, ""))
+            best, cost = cheapest(mine, column)
+            if cost:
+                cost = f"{cost.group(1)} s CPU ({cost.group(2)})"
+            else:  # not reached: the first element's cell says how far it came
+                best = mine.index[0] if len(mine) else "smfem"
+                cost = str(mine.at[best, column]) if len(mine) else ""
             others = []
-            for solver, row in rows.drop(index=mine).iterrows():
+            for solver, row in others_rows.iterrows():
                 speedup = row.get(f"smfem_speedup_{column.removeprefix('cpu_s_to_')}")
                 if isinstance(speedup, str) and speedup:
                     others.append(f"{solver} {speedup}")

@@ -13,10 +13,10 @@ import pandas as pd
 
 from cases import get_case
 
-from studies import effectivity, metrics
-from studies.jobs import NOT_AVAILABLE, OK
 from runs.registry import SMFEM, lookup
 
+from studies import effectivity, metrics
+from studies.jobs import NOT_AVAILABLE, OK
 from studies.plan import series_solvers
 from .references import best_history, published_points
 from studies.study import CaseRuns

@@ -1,8 +1,9 @@
 """The report's verdict: one sentence per scene from the headline table, numbers included.
 
 Where SMFEM, with the cheaper of its elements there, reaches the smallest target it can (1 %
-before 5 %), at what CPU time and settings, and how that compares with each other solver at the same target; where it reaches
-neither, its best error and who does better; where no claim can be made, why.
+before 5 %), at what CPU time and settings, and how that compares with each other solver at
+the same target; where it reaches neither, its best error and who does better; where no claim
+can be made, why.
 """
 
 from __future__ import annotations
@@ -43,18 +44,23 @@ def _pct_text(error_pct: float) -> str:
     return f"{error_pct:.2g} %" if math.isfinite(error_pct) else "no error measured"
 
 
-def _cheapest(mine: pd.DataFrame, target: float):
-    """SMFEM's element that reaches ``target`` cheapest, and its cost cell's match; (None, None)."""
-    found = [(float(m.group(1)), solver, m) for solver, row in mine.iterrows()
-             if (m := _COST.match(str(row[f"cpu_s_to_{_pct(target)}"])))]
+def split_smfem(rows: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Headline rows (indexed by solver) as SMFEM's series (one per element) and the others."""
+    is_mine = [lookup(s).family == SMFEM for s in rows.index]
+    return rows[is_mine], rows[[not m for m in is_mine]]
+
+
+def cheapest(mine: pd.DataFrame, column: str):
+    """SMFEM's element whose ``column`` (``cpu_s_to_1pct``, ...) is the cheapest cost, and that
+    cell's match (CPU, settings); (None, None) where none reaches it."""
+    found = [(float(m.group(1)), solver, m) for solver, row in mine.iterrows() if (m := _COST.match(str(row[column])))]
     return min(found, key=lambda f: f[0])[1:] if found else (None, None)
 
 
 def sentence(case: str, rows: pd.DataFrame) -> str:
     """The verdict on one scene from its headline rows (one per solver, indexed by solver):
     SMFEM with whichever of its elements is cheapest at a target."""
-    is_mine = [lookup(s).family == SMFEM for s in rows.index]
-    mine, others = rows[is_mine], rows[[not m for m in is_mine]]
+    mine, others = split_smfem(rows)
     if not len(mine):
         return f"{case}: SMFEM has no run in this study."
     first = [str(c) for c in mine[f"cpu_s_to_{_pct(TARGETS[0])}"]]
@@ -62,7 +68,7 @@ def sentence(case: str, rows: pd.DataFrame) -> str:
         return f"{case}: SMFEM cannot run this scene ({first[0]})."
     best = min((e for e in mine.best_error_pct if math.isfinite(e)), default=math.nan)
     for target in TARGETS:
-        solver, cost = _cheapest(mine, target)
+        solver, cost = cheapest(mine, f"cpu_s_to_{_pct(target)}")
         if cost:
             compared = [c for other, row in others.iterrows()
                         if (c := _comparison(other, row[f"smfem_speedup_{_pct(target)}"]))]

@@ -229,10 +229,10 @@ class BlockIterative:
         anderson = Anderson(self.memory) if self.memory else None
         # the plastic loads extrapolated from the last two steps: a closer start (strip: 5.8 -> 5.0
         # iterations per step); the iterations recompute them from the state, so only the start moves
-        x, loads = u, 2 * self.loads - self.loads_before
+        x = u
+        loads = start = 2 * self.loads - self.loads_before
         for iteration in range(1, self.max_iter + 1):
             t0 = tick()
-            used = loads
             dx = self.correction(x, predicted, loads)
             x = x + dx if anderson is None else anderson.next(x, dx)
             t1 = tick()
@@ -257,7 +257,7 @@ class BlockIterative:
             # an exact solve (:attr:`exact_solve`; no Anderson mixing yet) with the loads
             # that the state now gives back is the step's exact solution: no second iteration
             # to confirm it (every elastic step: the thick cylinder's first 35 of 100)
-            exact = self.exact_solve and iteration == 1 and (loads is used or np.array_equal(loads, used))
+            exact = self.exact_solve and iteration == 1 and np.array_equal(loads, start)
             if exact or change2 <= self.tol**2 * max(size2, 1e-300):
                 self.pending = (PointState(law_state, relaxed), loads)
                 return x, iteration

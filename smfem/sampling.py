@@ -120,7 +120,7 @@ class SamplePoints:
     def __init__(self, model, oversampling: float, at_least: int = 0):
         self.model = model
         self.x3, self.w, self.symmetry = sample_points(model, oversampling, at_least)
-        self.images = self.symmetry.images(self.x3)  # fixed: probes unfold the points every step
+        self.images = self.symmetry.images(self.x3)  # fixed: fields, zones and probes map onto the points
         self.factor = inhomogeneity.element_factor(model.case, model.mesh, self.x3)  # (ne, n_x3)
         self.scale = self.factor[None, :, None, :]
         self.homogeneous = bool(np.all(self.factor == 1.0))  # no contrast material: no scaling
