@@ -12,6 +12,10 @@ import meshio
 import numpy as np
 
 
+#: the equivalent plastic strain that counts as plastic in a zone's area
+ZONE_THRESHOLD = 1e-3
+
+
 @dataclass
 class ZoneSnapshot:
     """The equivalent plastic strain at one time, cell by cell in the plane both solvers draw

@@ -5,10 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cases.result import ZONE_THRESHOLD as THRESHOLD
 from cases.result import ZoneSnapshot
-
-#: the equivalent plastic strain that counts as plastic
-THRESHOLD = 1e-3
 
 
 def plastic_area(snapshot: ZoneSnapshot, threshold: float = THRESHOLD) -> float:
