@@ -206,8 +206,8 @@ class BlockIterative:
 
     def correction(self, x: np.ndarray, predicted: np.ndarray, loads: np.ndarray) -> np.ndarray:
         """``A^-1`` times the residual at ``x`` (for ``'sor'``: one block SOR sweep's change)."""
-        if self.kind == "coupled":
-            return self.lus[0].solve(self.residual(x, predicted, loads))
+        if self.kind == "coupled":  # A is K + a0 M itself: x + A^-1 (b - A x) = A^-1 b, without K x
+            return self.lus[0].solve(self.rhs_step + loads) - x
         if self.kind == "matrix-free":
             count = []
             dx, _ = sla.cg(self.A, self.residual(x, predicted, loads), rtol=KRYLOV_RTOL, M=self.blocks,
@@ -226,6 +226,8 @@ class BlockIterative:
         number of iterations (the material state waits for :meth:`commit`)."""
         tick, pts, state = time.perf_counter, self.points, self.state
         self.Q_now = self.load(t)
+        if self.kind == "coupled":  # the step's loads but the plastic ones
+            self.rhs_step = self.Q_now + self.c.a0 * self.op.M(predicted)
         anderson = Anderson(self.memory) if self.memory else None
         # the plastic loads extrapolated from the last two steps: a closer start (strip: 5.8 -> 5.0
         # iterations per step); the iterations recompute them from the state, so only the start moves

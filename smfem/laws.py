@@ -91,7 +91,7 @@ class VonMises(Elastic):
         return PlasticState(np.zeros((6, n)), np.zeros(n), np.zeros((6, n)))
 
     def stress(self, trial: np.ndarray, state) -> tuple[np.ndarray, PlasticState]:
-        mu = np.broadcast_to(self.mu, state.alpha.shape)
+        mu = self.mu if self.mu.shape == state.alpha.shape else np.broadcast_to(self.mu, state.alpha.shape)
         sigma, alpha, at, deps_p = return_map_rows(trial, state.alpha, mu, self.sigma_y0, self.H)
         return sigma, PlasticState(sigma, alpha, state.eps_p, at, deps_p)
 

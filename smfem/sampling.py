@@ -24,8 +24,17 @@ import scipy.sparse as sp
 from . import fourier, inhomogeneity
 from .assembly import element_dofs
 from .elements import DOFS_PER_NODE
+
+
+def _rows_of_type(t: int) -> slice:
+    """The stress rows of basis type ``t``, a slice (a view, not a copy, per synthesis)."""
+    rows = np.flatnonzero(fourier.ROW_TYPE == t)
+    assert np.array_equal(rows, np.arange(rows[0], rows[-1] + 1)), "rows of one type must be contiguous"
+    return slice(int(rows[0]), int(rows[-1]) + 1)
+
+
 #: stress rows by basis type along x3 (0: psi1, 1: psi3)
-ROWS = (np.flatnonzero(fourier.ROW_TYPE == 0), np.flatnonzero(fourier.ROW_TYPE == 1))
+ROWS = (_rows_of_type(0), _rows_of_type(1))
 
 
 def sample_operators(model, elements: np.ndarray | slice = slice(None)) -> np.ndarray:
@@ -66,7 +75,7 @@ class Symmetry:
             elif n > 1 or mirror:
                 self.width = self.period / n / (2 if mirror else 1)
                 self.copies, self.mirror = n * (2 if mirror else 1), mirror
-        if self.copies > 1 and not self._shared_by(case, model.mesh):
+        if self.copies > 1 and (case.cutouts or case.variation) and not self._shared_by(case, model.mesh):
             self.width, self.copies, self.mirror = self.period, 1, False
 
     def images(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -42,16 +42,21 @@ PRESENTATION = {"runs/figures.py", "runs/progress.py", "runs/estimate.py", "runs
 
 @functools.cache
 def code_version(solver: str) -> str:
-    """sha256 (16 hex digits) of the ``.py`` files of the packages ``solver`` depends on."""
+    """sha256 (16 hex digits) of the ``.py`` and ``.csv`` files of the packages ``solver``
+    depends on (``cases/x3_points.csv`` sets SMFEM's stress points: a new table reruns them)."""
     h = hashlib.sha256()
     for package in (*lookup(solver).packages, *SHARED_SOURCES):
-        root = Path(importlib.util.find_spec(package).submodule_search_locations[0])
-        for path in sorted(root.rglob("*.py")):
-            if f"{package}/{path.relative_to(root)}" in PRESENTATION:
-                continue
+        for root, path in source_files(package):
             h.update(str(path.relative_to(root)).encode())
             h.update(path.read_bytes())
     return h.hexdigest()[:16]
+
+
+def source_files(package: str) -> list[tuple[Path, Path]]:
+    """``(package root, file)`` of the files of ``package`` that decide a run's results."""
+    root = Path(importlib.util.find_spec(package).submodule_search_locations[0])
+    return [(root, path) for path in sorted(p for p in root.rglob("*") if p.suffix in (".py", ".csv"))
+            if f"{package}/{path.relative_to(root)}" not in PRESENTATION]
 
 
 def key_of(job: Job) -> dict:
