@@ -58,6 +58,5 @@ class SolverOptions:
     def __post_init__(self):
         if self.iteration_matrix not in ("auto", "coupled", "matrix-free", "sor"):
             raise ValueError(f"iteration_matrix={self.iteration_matrix!r}: 'auto', 'coupled', 'matrix-free' or 'sor'")
-
         if self.x3_oversampling is not None and self.x3_oversampling < 1.0:
             raise ValueError(f"x3_oversampling={self.x3_oversampling}: at least 1 (fewer points are not exact)")

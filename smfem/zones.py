@@ -28,9 +28,9 @@ def smfem_snapshot(t: float, model, case, peps: np.ndarray, x3: np.ndarray) -> Z
     if case.body == "ring" and case.axisymmetric:
         return ZoneSnapshot(t, X, value.max(axis=1), peak, np.ones(len(X), bool))
     element, interval, a, b, mean, mids = along_x3(value, x3, case)
-    solid = element_factor(case, model.mesh, mids % (2 * math.pi if case.body == "ring" else case.length))[element, interval] == 1.0
-    lo1, hi1 = X[element, :, 0].min(1), X[element, :, 0].max(1)
-    lo2, hi2 = X[element, :, 1].min(1), X[element, :, 1].max(1)
+    solid = element_factor(case, model.mesh, mids)[element, interval] == 1.0
+    lo1, hi1 = X[:, :, 0].min(1)[element], X[:, :, 0].max(1)[element]
+    lo2, hi2 = X[:, :, 1].min(1)[element], X[:, :, 1].max(1)[element]
     if case.body == "ring":  # a plane section: wedges in x-y
         ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
         poly = np.stack([np.stack([lo1 * ca, lo1 * sa], -1), np.stack([hi1 * ca, hi1 * sa], -1),
@@ -45,7 +45,7 @@ def along_x3(value: np.ndarray, x3: np.ndarray, case, threshold: float = ZONE_TH
     """Cells along x3 of the piecewise-linear line through ``value`` (n_elements, n) at the
     sorted points ``x3`` over the period: per cell its element, the interval between knots it
     lies in, ``a`` and ``b`` (its x3 ends) and the line's mean over it, each a flat array; and
-    the intervals' midpoints.
+    the intervals' midpoints, within the period.
 
     The line is held constant from the outermost points of a piece to its ends (a cut-out's
     edge, where the material jumps; a prism's ends), wraps around a ring, and is cut where it
@@ -77,4 +77,4 @@ def along_x3(value: np.ndarray, x3: np.ndarray, case, threshold: float = ZONE_TH
     cells = [(element[whole], interval[whole], a[whole], b[whole], 0.5 * (p + q)[whole]),
              (element[crossing], interval[crossing], a[crossing], c[crossing], 0.5 * (p[crossing] + threshold)),
              (element[crossing], interval[crossing], c[crossing], b[crossing], 0.5 * (threshold + q[crossing]))]
-    return tuple(np.concatenate(parts) for parts in zip(*cells)) + (0.5 * (knots[:-1] + knots[1:]),)
+    return tuple(np.concatenate(parts) for parts in zip(*cells)) + ((0.5 * (knots[:-1] + knots[1:])) % period,)

@@ -8,13 +8,12 @@ import numpy as np
 import pytest
 
 from cases import get_case
+from cases.result import ZONE_THRESHOLD as THRESHOLD
 from smfem.inhomogeneity import cut_edges
 from smfem.options import SolverOptions
 from smfem.solver import solve
 from smfem.zones import along_x3
 from runs.zones import plastic_area
-
-THRESHOLD = 1e-3
 
 
 def cells(value, x3, case):
