@@ -50,7 +50,7 @@ def split_sets(items, solver: str) -> tuple[dict, dict]:
     mine = lookup(solver).options()
     others = {}  # option -> the first solver (by family name) that takes it
     for s in solvers():
-        for name in s.options() - mine:
+        for name in s.options().keys() - mine.keys():
             others.setdefault(name, s.family)
     case_items, options = [], {}
     for item in items or ():
@@ -69,7 +69,13 @@ def split_sets(items, solver: str) -> tuple[dict, dict]:
     return parse_sets(case_items), options
 
 
+#: the largest --max-cpu, s (a year): every bound finite, as the parameters' are
+MAX_CPU_S = 3.2e7
+
+
 def command(args) -> int:
+    if not 0 < args.max_cpu <= MAX_CPU_S:  # NaN fails too
+        raise UsageError(f"--max-cpu {args.max_cpu:g} is out of range: CPU seconds in (0, {MAX_CPU_S:g}]")
     sets, given = split_sets(args.sets, args.solver)
     case = get_case(args.case, sets)
     try:

@@ -56,6 +56,10 @@ def add_study_options(p, default_out: str | None) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+#: the most local worker processes (each holds a solver's matrices)
+MAX_WORKERS = 256
+
+
 def check_workers(args) -> None:
-    if args.workers < 1:
-        raise UsageError(f"--workers={args.workers} is out of range: --workers must be an integer >= 1")
+    if not 1 <= args.workers <= MAX_WORKERS:
+        raise UsageError(f"--workers={args.workers} is out of range: --workers must be an integer in [1, {MAX_WORKERS}]")

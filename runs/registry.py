@@ -16,8 +16,10 @@ Each solver is imported only when it runs, so ``smfem run`` does not load the re
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import Callable
 
+from cases.params import ParameterError, Spec
 from cases.result import RunResult
 
 SMFEM, REFERENCE, REF2D, REF3D, MODAL = "smfem", "reference", "reference-2d", "reference-3d", "reference-modal"
@@ -62,9 +64,10 @@ class Solver:
     series : a study may run a series of it (not: the truth engines, and ``reference``,
         whose ``dim`` a study fixes by name)
     dear : its runs are a study's longest (3-D, an external program): started first
-    options : ``options() -> frozenset``, the names of its own options (``solve``'s ``options``),
-        which ``smfem run --set`` passes to it rather than to the case (a function: the solver's
-        options module is imported only when asked)
+    options : ``options() -> dict``, its own options (``solve``'s ``options``) by name, each with
+        the :class:`cases.params.Spec` that checks it: ``smfem run --set`` passes them to it
+        rather than to the case (a function: the solver's options module is imported only when
+        asked)
     make_options : ``make_options(dict)``: the options ``run`` takes, checked (a ValueError or
         TypeError names a bad one)
     checks : ``checks() -> dict``: the solver's own numerical checks by name (the stability
@@ -88,7 +91,7 @@ class Solver:
     command_line: bool = True
     series: bool = True
     dear: bool = False
-    options: Callable[[], frozenset] = frozenset
+    options: Callable[[], dict] = dict
     make_options: Callable[[dict], object] = dict
     checks: Callable[[], dict] = dict
 
@@ -230,12 +233,10 @@ def _calculix(case, progress, fields, every, options) -> RunResult:
     return calculix(case, progress=progress)
 
 
-def _smfem_options() -> frozenset:
-    from dataclasses import fields
+def _smfem_options() -> dict:
+    from smfem.options import SPECS
 
-    from smfem.options import SolverOptions
-
-    return frozenset(f.name for f in fields(SolverOptions))
+    return SPECS
 
 
 def _smfem_make_options(options: dict):
@@ -257,16 +258,30 @@ def _reference_checks() -> dict:
     return {"static_probes": checks.static_probes}
 
 
-def _reference_options() -> frozenset:
-    return frozenset({"grading"})
+#: the reference FEM's own options, checked as case parameters are (here, not in its package:
+#: ``smfem run`` reads every solver's option names and must not load the reference to do so)
+_REFERENCE_OPTIONS = {
+    # beta of the geometric grading toward a cut-out's corner lines (1: uniform); far past 8 the
+    # smallest element is a round-off of the span
+    "grading": Spec(float, 1.0, 8.0, help="mesh grading toward the re-entrant corner lines (1: uniform)"),
+}
+_EXPLICIT_OPTIONS = {
+    **_REFERENCE_OPTIONS,
+    "bbar": Spec(bool, help="B-bar: the volumetric strain projected per element"),
+    "step_divisor": Spec(int, 1, 1000, help="divides the explicit step (a time ladder)"),
+}
 
 
-def _explicit_options() -> frozenset:
-    return frozenset({"grading", "bbar", "step_divisor"})
+def checked(options: dict, specs: dict) -> dict:
+    """``options`` with each value checked and converted by its spec (:class:`cases.ParameterError`)."""
+    for key in options:
+        if key not in specs:
+            raise ParameterError(f"unknown option {key!r}: allowed are {', '.join(sorted(specs))}")
+    return {key: specs[key].check(key, value) for key, value in options.items()}
 
 
-_ON_A_MESH = dict(run=_reference, family=REFERENCE, estimated=True, options=_reference_options,
-                  checks=_reference_checks)  # the reference FEM, by dim
+_ON_A_MESH = dict(run=_reference, family=REFERENCE, estimated=True, options=partial(dict, _REFERENCE_OPTIONS),
+                  make_options=partial(checked, specs=_REFERENCE_OPTIONS), checks=_reference_checks)  # by dim
 register(Solver(SMFEM, _smfem, packages=("smfem",), label="SMFEM", color="C0", marker="o", harmonics=True,
                 estimated=True, options=_smfem_options, make_options=_smfem_make_options, checks=_smfem_checks))
 register(Solver(SMFEM_QUAD9, _smfem, fixes=(("element", "quad9"),), family=SMFEM, packages=("smfem",),
@@ -283,4 +298,5 @@ register(Solver(MODAL, _modal, supports=frozenset(), label="reference FEM, harmo
 register(Solver(CALCULIX, _calculix, supports=frozenset((PLASTICITY,)), label="CalculiX 2D", color="C4", marker="D",
                 prose="CalculiX", dear=True))
 register(Solver(EXPLICIT, _explicit, supports=EVERYTHING - {FORCES}, label="reference FEM, explicit", color="C6",
-                marker="P", series=False, options=_explicit_options))
+                marker="P", series=False, options=partial(dict, _EXPLICIT_OPTIONS),
+                make_options=partial(checked, specs=_EXPLICIT_OPTIONS)))

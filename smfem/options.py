@@ -9,7 +9,27 @@ element, the case's ``element``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+
+from cases.params import Spec
+
+#: what each field accepts, checked as case parameters are (``--set``: one line, exit 2); every
+#: bound finite, so that no setting runs away (an Anderson memory of 10^9 iterates, a floor of
+#: 10^12 stress points)
+SPECS = {
+    "iteration_matrix": Spec(str, choices=("auto", "coupled", "matrix-free", "sor"),
+                             help="what a nonlinear step's iterations solve with"),
+    "anderson": Spec(int, 0, 100, help="iterates Anderson acceleration remembers (0: the plain iteration)"),
+    # block SOR converges for omega in (0, 2) only (Ostrowski-Reich)
+    "relaxation": Spec(float, 0.0, 2.0, open_lo=True, open_hi=True, help="omega of the block SOR"),
+    "max_iterations": Spec(int, 1, 100_000, help="iterations allowed per step"),
+    "direct_max_nonzeros": Spec(int, 0, 10**12, help="largest coupled system factorized whole"),
+    # None (the default): the measured multiple; fewer than the exact count would not be exact
+    "x3_oversampling": Spec(float, 1.0, 64.0, help="stress points along x3, in multiples of the exact count"),
+    "x3_min_points": Spec(int, 0, 100_000, help="fewest stress points along x3 (0: no floor)"),
+    "layer_points_per_harmonic": Spec(int, 1, 1000, help="contact-layer points per harmonic"),
+    "max_state_iterations": Spec(int, 1, 100_000, help="contact-layer state iterations allowed per step"),
+}
 
 
 @dataclass(frozen=True)
@@ -56,7 +76,9 @@ class SolverOptions:
     max_state_iterations: int = 60
 
     def __post_init__(self):
-        if self.iteration_matrix not in ("auto", "coupled", "matrix-free", "sor"):
-            raise ValueError(f"iteration_matrix={self.iteration_matrix!r}: 'auto', 'coupled', 'matrix-free' or 'sor'")
-        if self.x3_oversampling is not None and self.x3_oversampling < 1.0:
-            raise ValueError(f"x3_oversampling={self.x3_oversampling}: at least 1 (fewer points are not exact)")
+        """Every field checked by its :data:`SPECS` (a :class:`cases.ParameterError`, one line)
+        and stored as its type (``--set anderson=3.0`` is the integer 3)."""
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not (f.name == "x3_oversampling" and value is None):
+                object.__setattr__(self, f.name, SPECS[f.name].check(f.name, value))

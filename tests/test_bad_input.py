@@ -21,6 +21,7 @@ from cases.params import MAX_STEPS
 from cases.params import out_of_range
 from cli import main, run as run_command
 from reports.stability_study import bad_input
+from runs.registry import lookup, solvers
 
 
 def cli_outcome(args: list[str]) -> dict:
@@ -71,6 +72,29 @@ def test_every_key_out_of_range_exits_2_naming_the_key(name, solver):
     assert count > 5 * len(CASES[name].SPECS)
 
 
+@pytest.mark.parametrize("solver", [s.name for s in solvers() if s.command_line and s.options()])
+def test_every_solver_option_out_of_range_exits_2_naming_it(solver):
+    """A solver's own options (``--set anderson=-3``, ``relaxation=5``, ``grading=0``) are
+    checked as case parameters are: exit 2, one line naming the option and its range, nothing
+    written."""
+    count = 0
+    for key, spec in lookup(solver).options().items():
+        for text in out_of_range(spec):
+            o = cli_outcome(["run", "dome", "--solver", solver, "--set", f"{key}={text}"])
+            assert o["code"] == 2, (key, text, o)
+            assert_one_clear_line(o["stderr"], key)
+            assert spec.describe() in o["stderr"] and not o["written"], (key, text, o)
+            count += 1
+    assert count >= 5 * len(lookup(solver).options())
+
+
+@pytest.mark.parametrize("text", ["-5", "0", "nan", "inf", "1e300"])
+def test_max_cpu_out_of_range_exits_2(text):
+    o = cli_outcome(["run", "thick_cylinder", "--tol", "5%", "--max-cpu", text])
+    assert o["code"] == 2 and not o["written"]
+    assert_one_clear_line(o["stderr"], "--max-cpu")
+
+
 def test_the_reports_bad_input_sweep_refuses_every_value():
     rows = bad_input()
     assert len(rows) > 100
@@ -97,6 +121,9 @@ def test_the_reports_bad_input_sweep_refuses_every_value():
         (["run", "dome", "--set", "q=0"], "nothing moves"),  # a valid value, a clear refusal by the solver
         (["run", "dome", "--solver", "ansys"], "invalid choice"),
         (["run"], "required: case"),
+        (["run", "dome", "--tol", "5%", "--max-cpu", "-5"], "--max-cpu"),
+        (["study", "dome", "--workers", "0"], "--workers"),
+        (["report", "--workers", "100000"], "--workers"),
     ],
 )
 def test_user_mistakes_exit_2_with_one_line(tmp_path, capsys, args, needle):
