@@ -11,7 +11,7 @@ from cases import ParameterError, get_case, parse_sets, rebuild
 from cases.params import parse_value
 from runs import validity
 from runs.estimate import estimate, summary_line
-from runs.files import write_run
+from runs.files import add_to_summary, write_run
 from runs.progress import Progress
 from runs.registry import FRAMES, SMFEM, family, lookup, named_for, solve, solvers
 from runs.tolerance import search
@@ -95,34 +95,44 @@ def command(args) -> int:
     result = _solve(args.solver, case, f"{case.name} ({args.solver})", args.quiet,
                     fields=not args.no_fields, every=args.every, options=args.options)
     wall = time.perf_counter() - wall0
-    est = None
-    if args.estimate == "on" and result.converged and lookup(args.solver).estimated:
-        est = estimate(case, args.solver, result, run=lambda solver, companion: _solve(
-            solver, companion, f"{companion.name} ({solver}, error-estimate companion)", args.quiet,
-            options=args.options))
-    est = _write_checked(out, case, args.solver, result, wall, est, **args.given_options)
+    # the run is on disk before its companions start: nothing they do can lose it
+    check = _write_checked(out, case, args.solver, result, wall, **args.given_options)
     if not result.converged:
         print(f"smfem: {case.name}: {result.message}", file=sys.stderr)
         return EXIT_NOT_CONVERGED
     print(f"{case.name} ({args.solver}): {len(result.iterations)} steps, {result.n_dof} dof, "
           f"cpu {result.cpu_time_s:.3g} s -> {out}")
-    if est is not None:
-        print(summary_line(case, args.solver, est))
+    if args.estimate == "on" and lookup(args.solver).estimated:
+        est = estimate(case, args.solver, result, run=lambda solver, companion: _solve(
+            solver, companion, f"{companion.name} ({solver}, error-estimate companion)", args.quiet,
+            options=args.options))
+        print(summary_line(case, args.solver, _add_estimate(out, check, est)))
     return 0
 
 
-def _write_checked(out: Path, case, solver: str, result, wall_s: float, est: dict | None, **extra) -> dict | None:
-    """Write the run with its validity and error estimate (no accuracy claimed for a run outside
-    the small-strain model: its companions measure the discretization of a model that does not
-    hold), print the validity warning if any; returns the estimate as written."""
+def _write_checked(out: Path, case, solver: str, result, wall_s: float, est: dict | None = None, **extra) -> dict:
+    """Write the run with its validity (and error estimate, where made already), print the
+    validity warning if any; returns the validity."""
     check = validity.check(case, result)
-    if est is not None and not check["valid"]:
-        est = {**est, "claim": "none: the run is outside the small-strain model (validity)"}
+    est = None if est is None else _claimed(check, est)
     write_run(out, case, family(solver), result, wall_s,
               extra={"validity": check, **({"error_estimate": est} if est else {}), **extra})
     warning = validity.warning_line(case, check)
     if warning:
         print(warning, file=sys.stderr)
+    return check
+
+
+def _claimed(check: dict, est: dict) -> dict:
+    """No accuracy claimed for a run outside the small-strain model: its companions measure the
+    discretization of a model that does not hold."""
+    return est if check["valid"] else {**est, "claim": "none: the run is outside the small-strain model (validity)"}
+
+
+def _add_estimate(out: Path, check: dict, est: dict) -> dict:
+    """Add the error estimate to the written run's summary.json; returns it as written."""
+    est = _claimed(check, est)
+    add_to_summary(out, {"error_estimate": est})
     return est
 
 
@@ -208,7 +218,10 @@ def _settings(case) -> str:
 
 
 def _estimated(attempt) -> str:
-    return "no estimate" if math.isinf(attempt.error) else f"estimated {100 * attempt.error:.3g} %"
+    if math.isinf(attempt.error):
+        return "no estimate"
+    missing = ", ".join(attempt.estimate.get("unmeasured", {}))
+    return f"estimated {100 * attempt.error:.3g} %" + (f" (partial: {missing} not measured)" if missing else "")
 
 
 def _achieved(attempt) -> str:
@@ -237,8 +250,11 @@ def _to_tolerance(case, args, out: Path) -> int:
         case, measured = rebuild(case, start[0]), start[1]
         print(f"--tol {100 * target:g} %: {case.name}'s measured front (truths/{case.name}/front.csv) starts at "
               f"{_settings(case)}, {100 * measured:.3g} % against the stored truth")
+    def written(run_case, result, wall_s):  # each finished run on disk before its companions start
+        _write_checked(out, run_case, args.solver, result, wall_s, **args.given_options)
+
     found = search(case, args.solver, target, args.max_cpu, fields=not args.no_fields, measured=measured,
-                   estimated=args.estimate == "on", options=args.options)
+                   estimated=args.estimate == "on", options=args.options, on_run=written)
     for k, a in enumerate(found.attempts, start=1):
         known = f"measured {100 * a.measured:.3g} % against the truth, " if a.measured is not None else ""
         print(f"--tol {100 * target:g} %: run {k} ({_settings(a.case)}): {known}{_estimated(a)}, "
@@ -256,7 +272,8 @@ def _to_tolerance(case, args, out: Path) -> int:
                    best.estimate if args.estimate == "on" else None, tolerance=tolerance, **args.given_options)
     outside = "" if best.valid else " (outside the small-strain model: no accuracy of the physical body is claimed)"
     if not found.met:
-        print(f"smfem: {case.name}: --tol {100 * target:g} % not met within --max-cpu {args.max_cpu:g} s: best "
+        why = f"({found.stopped})" if found.stopped else f"within --max-cpu {args.max_cpu:g} s"
+        print(f"smfem: {case.name}: --tol {100 * target:g} % not met {why}: best "
               f"{_achieved(best)} ({_settings(best.case)}){outside}, kept in {out}", file=sys.stderr)
         return EXIT_NOT_CONVERGED
     print(f"{case.name} ({args.solver}): --tol {100 * target:g} % met: {_achieved(best)} at "

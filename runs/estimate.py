@@ -32,6 +32,11 @@ cost an eighth to a sixteenth of the run each. A halved mesh keeps the cut-outs'
 nodes (the notched strip's notch, 2.5 elements deep at half its paper mesh, would otherwise
 become another body). The total is the sum of the parts: they may cancel in the run; the
 estimate does not count on it.
+
+The estimate serves the run, never the other way round: a companion whose settings leave a
+parameter's range (twice the step above the largest ``dt``, a mesh that cannot be halved) is
+moved to the finer side or left out, one that fails or does not converge leaves its part out,
+and the estimate says which parts it could not measure (``partial``, ``unmeasured``).
 """
 
 from __future__ import annotations
@@ -41,7 +46,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cases import rebuild
+from cases import ParameterError, rebuild
 
 from .errors import probe_error
 from .registry import lookup, solve, solvers
@@ -72,32 +77,95 @@ PARTS = ("space", "harmonics", "time")
 class Companion:
     """One companion run: its parameter overrides, and which run it is compared with."""
 
-    name: str  # a part, or the part's third level ("time2", "harmonics2")
+    name: str  # a part, its third level ("time2", "harmonics2") or its finer side ("time_up", ...)
     overrides: dict
     against: str  # "run" or another companion's name
 
+    @property
+    def part(self) -> str:
+        return self.name.removesuffix("2").removesuffix("_up")
 
-def companions(case, solver: str) -> list[Companion]:
+
+@dataclass(frozen=True)
+class Plan:
+    """A run's companions, the parts measured on the finer side from the start (part ->
+    companion: twice the step leaves the range, one harmonic cannot be halved) and the parts
+    no companion can measure (part -> why)."""
+
+    companions: list[Companion]
+    upward: dict[str, str]
+    unmeasured: dict[str, str]
+
+
+#: a halved mesh must be at least this much coarser to measure space: a section whose
+#: segments have one element each cannot be halved (``coarsen`` keeps one per segment)
+MIN_SPACE_RATIO = 1.25
+
+
+def admissible(case, overrides: dict) -> bool:
+    """Whether ``case`` with ``overrides`` is a valid case: twice the step of a run at the
+    largest ``dt``, or ``coarsen`` past its range, is not one."""
+    try:
+        rebuild(case, overrides)
+    except ParameterError:
+        return False
+    return True
+
+
+def plan(case, solver: str, on_coarse: bool = True) -> Plan:
     """The companion runs of ``case`` for ``solver`` (an ``estimated`` one of
     :mod:`runs.registry`, else none: time-stepping on a mesh; the modal truth is exact in time,
     the explicit engine sets its own step, CalculiX meshes on its own): the coarse mesh, and on
-    it twice and four times the step and (a solver with harmonics) half and a quarter of the
-    harmonics, the third levels observing the orders. Both solvers keep the cut-outs' edges as
-    grid nodes at any mesh, so the coarse mesh is the same body."""
+    it (``on_coarse``; else on the run's own mesh) twice and four times the step and (a solver
+    with harmonics) half and a quarter of the harmonics, the third levels observing the orders.
+    Both solvers keep the cut-outs' edges as grid nodes at any mesh, so the coarse mesh is the
+    same body. A companion outside the parameters' ranges is never planned: time and harmonics
+    move to the finer side (half the step, two harmonics), space is left out, and the plan
+    says why."""
     entry = lookup(solver)
     if not entry.estimated:
-        return []
-    coarse = halved(case)
-    out = [Companion("space", coarse, "run")]
-    if case.n_steps >= 2:  # twice the step fits the window
-        out.append(Companion("time", {**coarse, "dt": 2 * case.dt}, "space"))
-    if case.n_steps >= 4:
-        out.append(Companion("time2", {**coarse, "dt": 4 * case.dt}, "time"))
-    if entry.harmonics and not case.axisymmetric and case.harmonics > 1:
-        out.append(Companion("harmonics", {**coarse, "harmonics": max(1, case.harmonics // 2)}, "space"))
-        if case.harmonics >= 4:
-            out.append(Companion("harmonics2", {**coarse, "harmonics": case.harmonics // 4}, "harmonics"))
-    return out
+        return Plan([], {}, {})
+    out, upward, unmeasured = [], {}, {}
+    base, against = {}, "run"
+    if on_coarse:
+        coarse = halved(case)
+        settings = ", ".join(f"{k} {v}" for k, v in coarse.items())
+        if not admissible(case, coarse):
+            unmeasured["space"] = f"half the mesh ({settings}) is outside the parameters' range"
+        elif space_ratio(case, rebuild(case, coarse)) < MIN_SPACE_RATIO:
+            unmeasured["space"] = f"the mesh cannot be halved ({settings} leaves one element per segment)"
+        else:
+            out.append(Companion("space", coarse, "run"))
+            base, against = coarse, "space"
+    if case.n_steps >= 2 and admissible(case, {**base, "dt": 2 * case.dt}):  # twice the step fits the window
+        out.append(Companion("time", {**base, "dt": 2 * case.dt}, against))
+        if case.n_steps >= 4 and admissible(case, {**base, "dt": 4 * case.dt}):
+            out.append(Companion("time2", {**base, "dt": 4 * case.dt}, "time"))
+    else:
+        _upward(case, "time", base, against, out, upward, unmeasured)
+    if entry.harmonics and not case.axisymmetric:
+        if case.harmonics > 1:
+            out.append(Companion("harmonics", {**base, "harmonics": max(1, case.harmonics // 2)}, against))
+            if case.harmonics >= 4:
+                out.append(Companion("harmonics2", {**base, "harmonics": case.harmonics // 4}, "harmonics"))
+        else:
+            _upward(case, "harmonics", base, against, out, upward, unmeasured)
+    return Plan(out, upward, unmeasured)
+
+
+def _upward(case, part: str, base: dict, against: str, out: list, upward: dict, unmeasured: dict) -> None:
+    """Plan ``part`` on the finer side (its coarser side is out of range), or say why not."""
+    c = finer_companion(case, part, base, against)
+    if admissible(case, c.overrides):
+        out.append(c)
+        upward[part] = c.name
+    else:
+        unmeasured[part] = "neither a coarser nor a finer companion is within the parameters' range"
+
+
+def companions(case, solver: str) -> list[Companion]:
+    """The companion runs of ``case`` for ``solver`` (:func:`plan`)."""
+    return plan(case, solver).companions
 
 
 def halved(case) -> dict:
@@ -161,47 +229,68 @@ def asymptotic(d_fine: float, d_coarse: float, ratio: float) -> bool:
     return d_fine > 0 and d_coarse >= d_fine * ratio ** OBSERVED_RANGE[0]
 
 
-def finer_companion(case, part: str, coarse: dict) -> Companion:
-    """The companion on the finer side of the run's setting, for a part whose coarser companions
-    are pre-asymptotic: half the step, or half as many harmonics again (on the coarse mesh)."""
+def finer_companion(case, part: str, base: dict, against: str = "space") -> Companion:
+    """The companion on the finer side of the run's setting (on the mesh ``base`` sets), for a
+    part whose coarser companions are pre-asymptotic or out of range: half the step, or half as
+    many harmonics again (at least one more)."""
     if part == "time":
-        return Companion("time_up", {**coarse, "dt": case.dt / 2}, "space")
-    return Companion("harmonics_up", {**coarse, "harmonics": (3 * case.harmonics) // 2}, "space")
+        return Companion("time_up", {**base, "dt": case.dt / 2}, against)
+    return Companion("harmonics_up", {**base, "harmonics": max((3 * case.harmonics) // 2, case.harmonics + 1)},
+                     against)
 
 
 def estimate(case, solver: str, result, run=solve) -> dict:
     """``error_estimate`` of a run (``result`` of ``solver`` on ``case``): per probe the total and
     its parts (and each part's order), the companions' settings and CPU. ``run(solver, case)``
-    makes a companion's result (the registry's ``solve`` by default)."""
-    comps = companions(case, solver)
-    if not comps:
+    makes a companion's result (the registry's ``solve`` by default).
+
+    The estimate serves the run and never ends it: a companion that raises or does not converge
+    leaves its part out (``partial``, with why under ``unmeasured``, the companion's message
+    under ``failed``); where the coarse mesh fails, time and harmonics are measured on the run's
+    own mesh instead. A third level that fails leaves its part at the assumed order."""
+    planned = plan(case, solver)
+    if not planned.companions and not planned.unmeasured:
         made_for = ", ".join(s.name for s in solvers() if s.estimated)
         return {"method": f"none: no estimate for {solver} (it is made for {made_for})"}
-    results, cases, cpu = {"run": result}, {"run": case}, {}
+    results, cases, cpu, failed = {"run": result}, {"run": case}, {}, {}
+    unmeasured, upward = dict(planned.unmeasured), dict(planned.upward)
 
     def made(c: Companion) -> bool:
-        """Run companion ``c``; whether it finished."""
-        cases[c.name] = rebuild(case, c.overrides)
-        results[c.name] = run(solver, cases[c.name])
-        cpu[c.name] = float(results[c.name].cpu_time_s)
-        return results[c.name].converged
+        """Run companion ``c``; whether it finished (why not, in ``failed``)."""
+        try:
+            cases[c.name] = rebuild(case, c.overrides)
+            made = run(solver, cases[c.name])
+        except Exception as exc:  # noqa: BLE001 - the run is the user's: a companion costs only its part
+            failed[c.name] = failure(exc)
+            return False
+        cpu[c.name] = float(made.cpu_time_s)
+        if not made.converged:
+            failed[c.name] = _one_line(made.message or "did not converge")
+            return False
+        results[c.name] = made
+        return True
 
-    def failed(c: Companion) -> dict:
-        return {"method": "companions", "failed": f"the {c.name} companion did not finish: {results[c.name].message}",
-                "companions_cpu_s": cpu}
-
+    comps = planned.companions
+    if comps and comps[0].name == "space" and not made(comps[0]):
+        unmeasured["space"] = f"the space companion did not finish ({failed['space']})"
+        rebased = plan(case, solver, on_coarse=False)  # time and harmonics on the run's own mesh
+        comps, upward = rebased.companions, dict(rebased.upward)
+        unmeasured.update(rebased.unmeasured)
+    done = []
     for c in comps:
-        if not made(c):
-            return failed(c)
-    by_name = {c.name: c for c in comps}
-    diffs = {c.name: _differences(case, results[c.against], results[c.name]) for c in comps}
+        if c.against in results and (c.name in results or made(c)):
+            done.append(c)
+        elif c.name in (c.part, upward.get(c.part)):  # the part's own companion: the part is lost
+            unmeasured.setdefault(c.part, f"the {c.name} companion did not finish ({failed.get(c.name)})")
+            upward.pop(c.part, None)
+    by_name = {c.name: c for c in done}
+    diffs = {c.name: _differences(case, results[c.against], results[c.name]) for c in done}
     fields = {p.name: p.field for p in case.probes}
     headline_probes = [n for n in result.history if fields.get(n) in ("u", "v")]
-    probes = _parts(case, result, cases, by_name, diffs, {})
+    probes = _parts(case, result, cases, by_name, diffs, upward)
     # a part whose coarser pair does not converge on a headline probe is measured on the finer
     # side, unless even its safe reading (the lowest order) hardly raises the run's estimate
-    upward = {}
-    for part in (p for p in ("time", "harmonics") if f"{p}2" in by_name):
+    for part in (p for p in ("time", "harmonics") if f"{p}2" in by_name and p not in upward):
         ratio = _ratio(part, cases[part], cases[f"{part}2"])
         if not any(not asymptotic(diffs[part][n], diffs[f"{part}2"].get(n, math.nan), ratio)
                    for n in headline_probes if n in diffs[part]):
@@ -209,19 +298,40 @@ def estimate(case, solver: str, result, run=solve) -> dict:
         rows = [probes[n] for n in headline_probes if n in probes]
         if rows and max(r["total"] for r in rows) <= (1 + NEGLIGIBLE) * max(r["total"] - r.get(part, 0.0) for r in rows):
             continue
-        c = finer_companion(case, part, by_name["space"].overrides)
-        if not made(c):
-            return failed(c)
-        comps.append(c)
+        parent = by_name[part]
+        base = {k: v for k, v in parent.overrides.items() if k not in ("dt", "harmonics")}
+        c = finer_companion(case, part, base, parent.against)
+        if not admissible(case, c.overrides):  # the safe reading stands
+            failed[c.name] = "not run: its settings are outside the parameters' range"
+            continue
+        if not made(c):  # the safe reading stands
+            continue
         by_name[c.name] = c
+        done.append(c)
         diffs[c.name] = _differences(case, results[c.against], results[c.name])
         upward[part] = c.name
-    if upward:
+    if set(upward) - set(planned.upward):
         probes = _parts(case, result, cases, by_name, diffs, upward)
-    return {"method": "companions", "probes": probes, "companions": {c.name: c.overrides for c in comps},
-            "measured_upward": sorted(upward),
+    out = {"method": "companions", "partial": bool(unmeasured)}
+    if any(row["orders"] for row in probes.values()):
+        out["probes"] = probes
+    out |= {"companions": {c.name: c.overrides for c in done}, "measured_upward": sorted(upward),
             "companions_cpu_s": cpu, "companions_cpu_total_s": float(sum(cpu.values())),
             "run_cpu_s": float(result.cpu_time_s)}
+    if unmeasured:
+        out["unmeasured"] = unmeasured
+    if failed:
+        out["failed"] = failed
+    return out
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def failure(exc: BaseException) -> str:
+    """One line naming an exception: its type, and its message where it has one."""
+    return _one_line(f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__)
 
 
 def _parts(case, result, cases: dict, by_name: dict, diffs: dict, upward: dict) -> dict:
@@ -230,8 +340,10 @@ def _parts(case, result, cases: dict, by_name: dict, diffs: dict, upward: dict) 
     probes = {}
     for name in result.history:
         row, orders = {}, {}
-        for part in (p for p in PARTS if p in by_name and name in diffs[p]):
+        for part in PARTS:
             measured = upward.get(part, part)
+            if measured not in by_name or name not in diffs[measured]:
+                continue
             c = by_name[measured]
             fine, coarse = cases[c.against], cases[measured]
             ratio = _ratio(part, fine, coarse)
@@ -264,13 +376,16 @@ def headline(case, est: dict) -> tuple[str, float] | None:
 
 def summary_line(case, solver: str, est: dict) -> str:
     """One line for the end of ``smfem run``."""
+    missing = "; ".join(f"{part}: {why}" for part, why in est.get("unmeasured", {}).items())
     if "probes" not in est:
-        return f"{case.name} ({solver}): error estimate {est.get('failed') or est['method']}"
+        return f"{case.name} ({solver}): error estimate " + (f"none: no part measured ({missing})" if missing
+                                                             else est["method"])
     top = headline(case, est)
     if not top:
         return f"{case.name} ({solver}): no displacement or velocity probe to estimate"
     parts = est["probes"][top[0]]
     split = ", ".join(f"{k} {100 * parts[k]:.2g} %" for k in PARTS if k in parts)
+    partial = f"; partial, not measured: {missing}" if missing else ""
     claim = f"; no accuracy claimed: {est['claim'].removeprefix('none: ')}" if "claim" in est else ""
-    return (f"{case.name} ({solver}): estimated error {100 * top[1]:.2g} % ({top[0]}: {split}); "
+    return (f"{case.name} ({solver}): estimated error {100 * top[1]:.2g} % ({top[0]}: {split}){partial}; "
             f"companions {est['companions_cpu_total_s']:.3g} s CPU{claim}")

@@ -93,6 +93,15 @@ def write_run(out: Path, case, solver: str, result, wall_time_s: float, zone_fig
     return written
 
 
+def add_to_summary(out: Path, extra: dict) -> dict:
+    """Add ``extra`` entries to the summary.json of a run written already (its error estimate,
+    made once the run is safe on disk); returns the summary."""
+    path = Path(out) / "summary.json"
+    written = {**json.loads(path.read_text()), **extra}
+    path.write_text(json.dumps(jsonable(written), indent=2))
+    return written
+
+
 def read_run(path: Path, fields: bool = True) -> tuple[RunResult, dict]:
     """The :class:`RunResult` that :func:`write_run` took, read back from its directory, and the
     summary.json beside it: the histories (to the 10 significant digits history.csv keeps), the

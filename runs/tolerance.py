@@ -22,10 +22,10 @@ import math
 import time
 from dataclasses import dataclass, field
 
-from cases import rebuild
+from cases import ParameterError, rebuild
 
 from . import validity
-from .estimate import PARTS, estimate, headline
+from .estimate import PARTS, estimate, failure, headline
 from .registry import solve
 
 #: how much one step of the search may refine a part
@@ -49,19 +49,30 @@ class Attempt:
         """The error the run is known to have: measured against the truth where it was, else estimated."""
         return self.error if self.measured is None else self.measured
 
+    @property
+    def partial(self) -> bool:
+        """Its estimate leaves a part out (:func:`runs.estimate.estimate`), and no truth measured it."""
+        return self.measured is None and bool(self.estimate.get("partial"))
+
+    def meets(self, target: float) -> bool:
+        """Whether the run is shown to be within ``target``: a partial estimate shows nothing."""
+        return self.achieved <= target and not self.partial
+
 
 @dataclass
 class Search:
     target: float
     attempts: list[Attempt] = field(default_factory=list)
+    #: why the search stopped before a run met the target, where it was not the budget
+    stopped: str = ""
 
     @property
     def best(self) -> Attempt:
-        return min(self.attempts, key=lambda a: a.achieved)
+        return min(self.attempts, key=lambda a: (not a.meets(self.target), a.achieved))
 
     @property
     def met(self) -> bool:
-        return bool(self.attempts) and self.best.achieved <= self.target
+        return bool(self.attempts) and self.best.meets(self.target)
 
     @property
     def cpu_s(self) -> float:
@@ -111,20 +122,34 @@ def growth(case, over: dict) -> float:
 
 
 def search(case, solver: str, target: float, max_cpu: float, progress=None, max_runs: int = 8,
-           fields: bool = False, measured: float | None = None, estimated: bool = True, options=None) -> Search:
+           fields: bool = False, measured: float | None = None, estimated: bool = True, options=None,
+           on_run=None) -> Search:
     """Runs from ``case``'s settings up, until one's estimate (or, for the first, the error
     ``measured`` against the truth at its settings) meets ``target`` (a fraction), the CPU (runs
     and companions) would pass ``max_cpu`` s. Without ``estimated`` (no companions) only the
     first run's ``measured`` error can meet the target. ``options``: the solver's own, for every
-    run and companion."""
+    run and companion. ``on_run(case, result, wall_s)`` is called with each run that finishes,
+    before its companions start (the caller writes it: nothing after can lose it). A later run
+    that fails, or settings past a parameter's range, end the search with the runs made
+    (:attr:`Search.stopped` says why); the first run's failure is the caller's, as a plain run's."""
     run = functools.partial(solve, options=options)
     found = Search(target)
     current = case
     while len(found.attempts) < max_runs:
         wall0 = time.perf_counter()
-        result = run(solver, current, progress=progress, fields=fields)
-        if not result.converged:
+        try:
+            result = run(solver, current, progress=progress, fields=fields)
+        except Exception as exc:  # noqa: BLE001 - the runs made so far are the user's
+            if not found.attempts:
+                raise
+            found.stopped = f"the run at the next settings failed: {failure(exc)}"
             break
+        if not result.converged:
+            if found.attempts:
+                found.stopped = f"the run at the next settings did not converge: {result.message}"
+            break
+        if on_run is not None:
+            on_run(current, result, time.perf_counter() - wall0)
         est = estimate(current, solver, result, run=run) if estimated else {"method": "none: --estimate off"}
         top = headline(current, est) if "probes" in est else None
         error = top[1] if top else math.inf
@@ -132,13 +157,19 @@ def search(case, solver: str, target: float, max_cpu: float, progress=None, max_
                           float(est.get("companions_cpu_total_s", 0.0)), time.perf_counter() - wall0,
                           measured if not found.attempts else None, validity.check(current, result)["valid"])
         found.attempts.append(attempt)
-        if attempt.achieved <= target or top is None:
+        if attempt.meets(target) or top is None:
             break
         over = next_settings(current, est, target)
         if not over:
+            if attempt.partial:
+                found.stopped = "the estimate is partial and its measured parts are within the target"
             break
         # the next run costs at least the last one times its refinement: stop before passing the budget
         if found.cpu_s + attempt.cpu_s * growth(current, over) > max_cpu:
             break
-        current = rebuild(current, over)
+        try:
+            current = rebuild(current, over)
+        except ParameterError as exc:
+            found.stopped = f"the next settings are outside the parameters' range: {exc}"
+            break
     return found

@@ -99,7 +99,7 @@ def judged(case, truth, t, history, est: dict) -> list[dict]:
     fields = {p.name: p.field for p in case.probes}
     window = case.references.get("comparison_window_s", 0.0)
     out = []
-    for probe, parts in est.get("probes", {}).items():
+    for probe, parts in ({} if est.get("partial") else est.get("probes", {})).items():  # a partial one is not judged
         if fields.get(probe) not in ("u", "v"):
             continue
         actual = math.nan

@@ -276,3 +276,130 @@ def test_a_finer_mesh_takes_off_the_coarsening_first():
     assert growth(case, {"coarsen": 2, "dt": case.dt / 2}) == pytest.approx(8)
     three_d = get_case("rod_impact", {"dim": 3})
     assert growth(three_d, {"refine": 2}) == pytest.approx(8)
+
+
+# --- the estimate serves the run: companions out of range or failing ----------------------------
+
+def _planned(case, solver=SMFEM):
+    p = E.plan(case, solver)
+    return {c.name: (c.overrides, c.against) for c in p.companions}, p.upward, p.unmeasured
+
+
+def test_companions_past_a_parameters_range_are_moved_to_the_finer_side_or_left_out():
+    # twice the largest dt (1e3 s) is out of range: time from half the step instead
+    comps, upward, unmeasured = _planned(get_case("thick_cylinder", {"dt": 1e3, "t_end": 3e3}))
+    assert "time" not in comps and comps["time_up"] == ({"coarsen": 2, "dt": 500.0}, "space")
+    assert upward == {"time": "time_up"} and not unmeasured
+    # one step: twice the step does not fit the window
+    assert _planned(get_case("thick_cylinder", {"t_end": 4e-5}))[0]["time_up"][0]["dt"] == 2e-5
+    # one harmonic cannot be halved: two instead
+    comps, upward, _ = _planned(get_case("thick_cylinder", {"harmonics": 1}))
+    assert comps["harmonics_up"][0]["harmonics"] == 2 and upward["harmonics"] == "harmonics_up"
+    # coarsen past its range: space left out, time and harmonics on the run's own mesh
+    comps, _, unmeasured = _planned(get_case("thick_cylinder", {"coarsen": 16}))
+    assert "space" not in comps and "coarsen 32" in unmeasured["space"]
+    assert comps["time"] == ({"dt": 2 * get_case("thick_cylinder").dt}, "run") and comps["harmonics"][1] == "run"
+    # segments of one element each: a mesh that cannot be halved
+    assert "cannot be halved" in _planned(get_case("notched_cylinder", {"coarsen": 8}))[2]["space"]
+    # every companion planned is a valid case
+    for sets in ({"dt": 1e3, "t_end": 3e3}, {"coarsen": 16, "harmonics": 1}, {"t_end": 4e-5}):
+        case = get_case("thick_cylinder", sets)
+        for c in E.companions(case, SMFEM):
+            get_case("thick_cylinder", {**sets, **c.overrides})
+
+
+def _failing(run, fails):
+    """``run`` but a companion whose case ``fails(case)`` names a failure: 'raise' raises,
+    anything else returns a run that did not converge."""
+    def wrapped(solver, case):
+        how = fails(case)
+        if how == "raise":
+            raise RuntimeError("the companion broke\nacross two lines")
+        result = run(solver, case)
+        return SimpleNamespace(**{**vars(result), "converged": False, "message": how}) if how else result
+    return wrapped
+
+
+def test_a_failing_companion_leaves_its_part_out_and_the_others_measured():
+    run, space, time, harmonics = _fake_solver()
+    case = get_case("thick_cylinder", {"refine": 2, "dt": 1e-5, "t_end": 1e-3})
+    result = run(SMFEM, case)
+    # the coarse mesh raises: space unmeasured, time and harmonics measured on the run's own mesh
+    est = E.estimate(case, SMFEM, result, run=_failing(run, lambda c: "raise" if c.refine == 1 else None))
+    assert est["partial"] and set(est["unmeasured"]) == {"space"} and "the companion broke across" in est["failed"]["space"]
+    assert est["companions"]["time"] == {"dt": 2e-5} and est["companions"]["harmonics"] == {"harmonics": 10}
+    for parts in est["probes"].values():
+        assert "space" not in parts and parts["time"] == pytest.approx(time(case), rel=0.1)
+        assert parts["harmonics"] == pytest.approx(harmonics(case), rel=0.1)
+    # the time companion does not converge: time unmeasured, the message kept
+    est = E.estimate(case, SMFEM, result, run=_failing(run, lambda c: "step 3 diverged" if c.dt == 2e-5 else None))
+    assert est["partial"] and set(est["unmeasured"]) == {"time"} and est["failed"] == {"time": "step 3 diverged"}
+    assert all("time" not in p and "space" in p and "harmonics" in p for p in est["probes"].values())
+    # only the third level fails: the part stands at its assumed order, the estimate whole
+    est = E.estimate(case, SMFEM, result, run=_failing(run, lambda c: "no" if c.dt == 4e-5 else None))
+    assert not est["partial"] and set(est["failed"]) == {"time2"}
+    assert all(p["orders"]["time"] == E.ORDERS["time"] for p in est["probes"].values())
+    # every companion fails: no part measured, no number claimed
+    est = E.estimate(case, SMFEM, result, run=_failing(run, lambda c: "raise"))
+    assert est["partial"] and "probes" not in est and set(est["unmeasured"]) == {"space", "time", "harmonics"}
+    assert "none: no part measured" in E.summary_line(case, SMFEM, est)
+
+
+def test_the_run_is_written_before_its_companions_and_kept_when_they_fail(tmp_path, capsys, monkeypatch):
+    from cli import run as run_command
+    from runs.registry import solve
+
+    out, calls = tmp_path / "run", []
+
+    def solve_then_fail(solver, case, **kw):
+        calls.append(case.params.get("coarsen", 1))
+        if len(calls) > 1:  # a companion: the run is on disk already
+            assert (out / "history.csv").exists() and (out / "summary.json").exists()
+            raise RuntimeError("a companion broke")
+        return solve(solver, case, **kw)
+
+    monkeypatch.setattr(run_command, "solve", solve_then_fail)
+    assert main(["run", "thick_cylinder", "--set", "t_end=2e-4", "--out", str(out), "--quiet", "--no-fields"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    est = summary["error_estimate"]
+    assert summary["converged"] and est["partial"] and "probes" not in est and len(calls) > 2
+    assert est["failed"]["space"] == "RuntimeError: a companion broke"
+    printed = capsys.readouterr().out.splitlines()
+    assert len(printed) == 2 and "error estimate none: no part measured (space: " in printed[1]
+    assert len(pd.read_csv(out / "history.csv")) == get_case("thick_cylinder", {"t_end": 2e-4}).n_steps + 1
+
+
+def test_tol_keeps_its_runs_when_a_later_run_fails(tmp_path, capsys, monkeypatch):
+    """--tol's second run raises (out of memory at the finer settings): the first run, written
+    as it finished, is the answer; exit 3 with one line saying why the search stopped."""
+    from runs import tolerance
+    from runs.registry import solve
+
+    out, runs = tmp_path / "tol", []
+
+    def second_run_fails(solver, case, **kw):
+        if "fields" in kw:  # one of the search's runs (companions are called without)
+            runs.append(case)
+            if len(runs) == 2:
+                raise MemoryError
+        elif runs and len(runs) == 1:
+            assert (out / "summary.json").exists()  # the first run is on disk before its companions
+        return solve(solver, case, **kw)
+
+    monkeypatch.setattr(tolerance, "solve", second_run_fails)
+    args = ["run", "thick_cylinder", "--set", "t_end=1.6e-3", "--tol", "5%", "--out", str(out), "--quiet", "--no-fields"]
+    assert main(args) == 3
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(err) == 1 and "not met (the run at the next settings failed: MemoryError)" in err[0], err
+    summary = json.loads((out / "summary.json").read_text())
+    assert len(summary["tolerance"]["runs"]) == 1 and summary["params"]["refine"] == runs[0].refine
+
+
+def test_a_partial_estimate_never_meets_the_tolerance():
+    from runs.tolerance import Attempt
+
+    case = get_case("thick_cylinder")
+    whole = Attempt(case, None, {"method": "companions", "partial": False}, 0.001, 1.0, 1.0)
+    partial = Attempt(case, None, {"method": "companions", "partial": True}, 0.001, 1.0, 1.0)
+    assert whole.meets(0.01) and not partial.meets(0.01)
+    assert Attempt(case, None, {"partial": True}, 0.5, 1.0, 1.0, measured=0.001).meets(0.01)  # the truth measured it
