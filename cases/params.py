@@ -154,6 +154,16 @@ def parse_value(key: str, text: str):
         raise ParameterError(f"{key}={text!r} is not a value: write a number, true/false or a choice") from None
 
 
+def parse_option(key: str, text: str):
+    """The VALUE of ``--set KEY=VALUE`` for a solver's own option: as :func:`parse_value`, or the
+    text itself (a word such as ``iteration_matrix=sor``, or a mistake the option's spec
+    refuses)."""
+    try:
+        return parse_value(key, text)
+    except ParameterError:
+        return text
+
+
 def parse_sets(items) -> dict:
     """Parse a list of ``KEY=VALUE`` strings into a dict (last one wins)."""
     out = {}

@@ -7,8 +7,8 @@ import sys
 import time
 from pathlib import Path
 
-from cases import ParameterError, get_case, parse_sets, rebuild
-from cases.params import parse_value
+from cases import get_case, parse_sets, rebuild
+from cases.params import parse_option
 from runs import validity
 from runs.estimate import estimate, summary_line
 from runs.files import add_to_summary, write_run
@@ -62,10 +62,7 @@ def split_sets(items, solver: str) -> tuple[dict, dict]:
         elif not text:
             raise UsageError(f"malformed --set {item!r}: expected KEY=VALUE")
         else:
-            try:
-                options[key] = parse_value(key, text)
-            except ParameterError:
-                options[key] = text  # a word: a choice such as iteration_matrix=sor
+            options[key] = parse_option(key, text)
     return parse_sets(case_items), options
 
 

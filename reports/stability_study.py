@@ -28,10 +28,10 @@ import numpy as np
 from cases import CASES, ParameterError, get_case, parse_sets
 from cases.analytic import lame_cylinder
 from cases.geometry import Axis, Pressure
-from cases.params import out_of_range
+from cases.params import out_of_range, parse_option
 
 from runs.errors import history_errors
-from runs.registry import REF2D, REF3D, REFERENCE, SMFEM, checks, lookup
+from runs.registry import REF2D, REF3D, REFERENCE, SMFEM, checks, lookup, solvers
 from runs.registry import solve as run_solver
 
 #: the acceptance limits of the stability section
@@ -185,10 +185,23 @@ def bad_input(names=tuple(CASES)) -> list[dict]:
                     message = ""
                 except ParameterError as exc:
                     message = str(exc)
-                rows.append({"case": name, "set": f"{key}={text}", "refused": bool(message),
-                             "lines": len(message.splitlines()), "message": message, "names_key": key in message,
-                             "names_range": "out of range" not in message or spec.describe() in message})
+                rows.append(_refusal(name, key, text, spec, message))
+    for solver in (s for s in solvers() if s.command_line):  # the solvers' own options, as --set passes them
+        for key, spec in solver.options().items():
+            for text in out_of_range(spec):
+                try:
+                    solver.make_options({key: parse_option(key, text)})
+                    message = ""
+                except ParameterError as exc:
+                    message = str(exc)
+                rows.append(_refusal(f"--solver {solver.name}", key, text, spec, message))
     return rows
+
+
+def _refusal(where: str, key: str, text: str, spec, message: str) -> dict:
+    return {"case": where, "set": f"{key}={text}", "refused": bool(message), "lines": len(message.splitlines()),
+            "message": message, "names_key": key in message,
+            "names_range": "out of range" not in message or spec.describe() in message}
 
 
 def contrast_sweep(contrasts=(1e-2, 1e-4, 1e-6, 1e-8, 1e-10), t_end: float = 0.012) -> list[dict]:
@@ -278,7 +291,7 @@ def stability_table() -> list[dict]:
             r["converged"] and r["finite"] and r["into_wall"] < r["into_wall_limit"])
     bad = bad_input()
     ok = [r for r in bad if r["refused"] and r["lines"] == 1 and r["names_key"] and r["names_range"]]
-    add("bad input", f"{len(bad)} out-of-range values, every key of every case",
+    add("bad input", f"{len(bad)} out-of-range values, every key of every case and every solver option",
         "refused with one line naming the key and range (exit 2 on the command line)", len(ok), len(bad),
         len(ok) == len(bad))
     add("study", "all of the above", "wall time, s", time.perf_counter() - t0, None, True)
