@@ -42,7 +42,7 @@ def stability(ctx) -> list[Section]:
             "thin dome: R/h from 54 to 1000, SMFEM 4 x 20, the mesh with 3 elements per clamped-edge layer and "
             "the quadratic element (quad9) on 4 x 20;",
             "200 harmonics; cut-out contrast 1e-2 ... 1e-10; rod impact at 100 v0 with friction 0 ... 1;",
-            "bad input: every out-of-range value of every key through the command line.",
+            "bad input: every out-of-range value of every key and every solver option through the command line.",
         ]),
         p(f"{len(rows) - len(failed)} of {len(rows)} figures within their limits."
           + ("" if failed.empty else " Outside: " + "; ".join(f"{r.check}, {r.setting}" for r in failed.itertuples())
