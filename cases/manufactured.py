@@ -13,7 +13,8 @@ x3 (``E`` and ``rho`` given as expressions of x3), which is what couples the har
 
 Strains and stresses are Voigt ``[11, 22, 33, 12, 13, 23]`` (engineering shears in the strains,
 as :mod:`smfem.plasticity` stores them). Everything here is data: sympy expressions, and the
-strings a case or a scene file holds; :func:`numeric` turns one into a numpy function of
+strings a case or a scene file holds, read by :func:`cases.expressions.parse` (a whitelist:
+nothing in a string runs as code); :func:`numeric` turns one into a numpy function of
 ``(x1, x2, x3, t)`` for either solver to evaluate at its own points.
 """
 
@@ -24,28 +25,32 @@ import functools
 import numpy as np
 import sympy as sp
 
+# the symbols and the parser live with the whitelist; the solvers and tests read them here
+from .expressions import VARIABLES, X1, X2, X3, ExpressionError, T, parse
 from .geometry import PRISM, RING
-
-X1, X2, X3, T = sp.symbols("x1 x2 x3 t", real=True)
-#: the names an expression may use: the body's coordinates and time
-VARIABLES = (X1, X2, X3, T)
-
-
-def parse(text: str) -> sp.Expr:
-    """An expression of ``x1, x2, x3, t`` (and numbers, ``pi``, the usual functions) from a string."""
-    expr = sp.sympify(text, locals={str(v): v for v in VARIABLES})
-    unknown = expr.free_symbols - set(VARIABLES)
-    if unknown:
-        raise ValueError(f"{text!r}: unknown names {', '.join(sorted(map(str, unknown)))} (use x1, x2, x3, t)")
-    return expr
 
 
 @functools.lru_cache(maxsize=256)
 def numeric(text: str):
     """``f(x1, x2, x3, t)`` of an expression string, vectorised over numpy arrays (a constant
-    comes back broadcast to the shape of its arguments)."""
+    comes back broadcast to the shape of its arguments); an :class:`ExpressionError` where numpy
+    cannot evaluate it (``sin(10**300)``: an integer past int64 in a ufunc) or gives complex
+    values (``(-1)**(1/3)``: a constant's complex root)."""
     f = sp.lambdify(VARIABLES, parse(text), "numpy")
-    return lambda x1, x2, x3, t: np.broadcast_to(f(x1, x2, x3, t), np.broadcast(x1, x2, x3, t).shape)
+
+    def g(x1, x2, x3, t):
+        return np.broadcast_to(f(x1, x2, x3, t), np.broadcast(x1, x2, x3, t).shape)
+
+    try:
+        with np.errstate(all="ignore"):  # an overflow or 1/x1 at the sample is the solver's to meet
+            sample = np.asarray(g(*[np.full(2, 0.5)] * 4))
+        if not np.iscomplexobj(sample):
+            sample.astype(float)  # an object array (of integers past int64) fails here
+    except (ArithmeticError, TypeError, ValueError) as exc:
+        raise ExpressionError(f"numpy cannot evaluate it ({type(exc).__name__}: {' '.join(str(exc).split())})") from None
+    if np.iscomplexobj(sample):
+        raise ExpressionError("its values are complex (a root of a negative number?)")
+    return g
 
 
 def time_function(text: str):

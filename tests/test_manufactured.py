@@ -86,7 +86,7 @@ def test_expressions_are_read_from_text_and_evaluated_on_arrays():
     x3 = np.linspace(0, 1, 5)
     assert np.allclose(f(0.0, 0.0, x3, 2.0), 1 + 0.6 * np.cos(2 * x3))
     assert mf.numeric("7")(np.zeros(4), 0.0, 0.0, 0.0).shape == (4,)
-    with pytest.raises(ValueError, match="unknown names y"):
+    with pytest.raises(ValueError, match="'y' is not a known name"):
         mf.parse("x1 + y")
 
 
