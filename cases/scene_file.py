@@ -375,7 +375,41 @@ class _Scene:
                     t.fail(key, f"{_excerpt(text)} uses {exc.name}: {key} may use {', '.join(allowed)} only")
                 except expressions.ExpressionError as exc:
                     t.fail(key, f"{_excerpt(text)} is not an expression: {exc}")
+        self.check_finite(t, pattern, time)
         return Force(tuple(pattern), time, edge)
+
+    def check_finite(self, t: _Table, pattern, time: str) -> None:
+        """Refuse a force no solver could apply, before any run: a pattern that is not finite
+        at sample points inside the body (``exp(1000*x1)``), a time factor that cannot be
+        evaluated or is not finite over [0, t_end] (``1/t``), evaluated as the solvers do."""
+        import numpy as np
+
+        from .manufactured import numeric, time_function
+
+        (s0, s1), (t0, t1) = self.section.s.span, self.section.t.span
+        inside = (np.arange(7) + 0.5) / 7  # off the edges and the axis, as quadrature points are
+        x1, x2 = self.section.to_x(s0 + (s1 - s0) * inside[:, None, None], t0 + (t1 - t0) * inside[None, :, None])
+        x3 = self.length * (np.arange(16) + 0.5) / 16
+        for text in pattern:
+            try:
+                with np.errstate(all="ignore"):  # an overflow is refused below, not warned of
+                    values = np.asarray(numeric(text)(x1, x2, x3, 0.0), float)
+            except (ArithmeticError, TypeError, ValueError) as exc:
+                t.fail("pattern", f"{_excerpt(text)} cannot be evaluated inside the body ({type(exc).__name__}: {exc})")
+            bad = ~np.isfinite(values)
+            if bad.any():
+                i, j, k = np.argwhere(bad)[0]
+                t.fail("pattern", f"{_excerpt(text)} is not finite inside the body (at x1 = {x1[i, j, 0]:g}, "
+                                  f"x2 = {x2[i, j, 0]:g}, x3 = {x3[k]:g})")
+        factor = time_function(time)
+        for when in np.linspace(0.0, self.params["t_end"], 201):
+            try:
+                with np.errstate(all="ignore"):  # an overflow is refused below, not warned of
+                    value = factor(float(when))
+            except (ArithmeticError, TypeError, ValueError) as exc:
+                t.fail("time", f"{_excerpt(time)} cannot be evaluated at t = {when:g} ({type(exc).__name__}: {exc})")
+            if not math.isfinite(value):
+                t.fail("time", f"{_excerpt(time)} is not finite at t = {when:g}")
 
     def read_variation(self, material: _Table) -> tuple[tuple[float, int], ...]:
         """``variation = [[a, m], ...]``: E and rho times ``1 + sum a cos(m k x3)``."""

@@ -258,3 +258,21 @@ def test_an_injected_expression_never_runs(tmp_path, capsys, slot, payload):
     assert err.startswith(f"smfem: error: {scene}: {table}[1].{key}: "), err
     assert not out.exists() and not marker.exists()
 
+
+@pytest.mark.parametrize("slot, expression, needle", [
+    (SLOTS[0], "exp(1e5*x2)", "is not finite inside the body (at x1 = "),
+    (SLOTS[1], "1/(x2 - x2)", "not a finite real number"),
+    (SLOTS[1], "x2 * exp(1e5*x2)", "is not finite inside the body"),
+    (SLOTS[2], "1/t", "cannot be evaluated at t = 0 (ZeroDivisionError"),
+    (SLOTS[2], "(t - 1)**0.5", "cannot be evaluated at t = 0 (TypeError"),
+    (SLOTS[2], "exp(1e7*t)", "is not finite at t = "),
+])
+def test_a_force_no_solver_could_apply_is_refused_before_any_run(tmp_path, capsys, slot, expression, needle):
+    """Found reviewing the parser: exp(1000*x1) ran into a traceback in SMFEM's assembly, a time
+    factor 1/t into a ZeroDivisionError at the first step. Each is refused as the file is read."""
+    scene, out = tmp_path / "scene.toml", tmp_path / "out"
+    scene.write_text(scene_with(slot, expression))
+    code = main(["run", str(scene), "--estimate", "off", "--no-fields", "--quiet", "--out", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and needle in err, err
+    assert err.startswith(f"smfem: error: {scene}: {slot[0]}[1].{slot[1]}: ") and not out.exists()
