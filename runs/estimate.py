@@ -259,15 +259,15 @@ def estimate(case, solver: str, result, run=solve) -> dict:
         """Run companion ``c``; whether it finished (why not, in ``failed``)."""
         try:
             cases[c.name] = rebuild(case, c.overrides)
-            made = run(solver, cases[c.name])
+            outcome = run(solver, cases[c.name])
         except Exception as exc:  # noqa: BLE001 - the run is the user's: a companion costs only its part
             failed[c.name] = failure(exc)
             return False
-        cpu[c.name] = float(made.cpu_time_s)
-        if not made.converged:
-            failed[c.name] = _one_line(made.message or "did not converge")
+        cpu[c.name] = float(outcome.cpu_time_s)
+        if not outcome.converged:
+            failed[c.name] = _one_line(outcome.message or "did not converge")
             return False
-        results[c.name] = made
+        results[c.name] = outcome
         return True
 
     comps = planned.companions
