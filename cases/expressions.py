@@ -25,6 +25,8 @@ import warnings
 
 import sympy as sp
 
+from .params import failure, one_line
+
 X1, X2, X3, T = sp.symbols("x1 x2 x3 t", real=True)
 #: the names an expression may use: the body's coordinates and time
 VARIABLES = (X1, X2, X3, T)
@@ -95,9 +97,9 @@ def parse(text: str, variables: tuple[str, ...] = NAMES) -> sp.Expr:
             warnings.simplefilter("ignore")
             tree = ast.parse(text, mode="eval")
     except SyntaxError as exc:
-        raise ExpressionError(_one_line(exc.msg)) from None
+        raise ExpressionError(one_line(exc.msg)) from None
     except ValueError as exc:  # null bytes (Python 3.11)
-        raise ExpressionError(_one_line(str(exc))) from None
+        raise ExpressionError(one_line(exc)) from None
     except (RecursionError, MemoryError):
         raise ExpressionError(f"nested too deeply for Python's parser (here at most {MAX_DEPTH} levels)") from None
     builder = _Builder(text, variables)
@@ -107,11 +109,7 @@ def parse(text: str, variables: tuple[str, ...] = NAMES) -> sp.Expr:
     except ExpressionError:
         raise
     except (ArithmeticError, TypeError, ValueError, RecursionError, MemoryError) as exc:
-        raise ExpressionError(f"sympy cannot build it ({type(exc).__name__}: {_one_line(str(exc))})") from None
-
-
-def _one_line(message: str) -> str:
-    return " ".join(message.split())
+        raise ExpressionError(f"sympy cannot build it ({failure(exc)})") from None
 
 
 class _Builder:

@@ -28,6 +28,7 @@ import sympy as sp
 # the symbols and the parser live with the whitelist; the solvers and tests read them here
 from .expressions import VARIABLES, X1, X2, X3, ExpressionError, T, parse
 from .geometry import PRISM, RING
+from .params import failure
 
 
 @functools.lru_cache(maxsize=256)
@@ -47,7 +48,7 @@ def numeric(text: str):
         if not np.iscomplexobj(sample):
             sample.astype(float)  # an object array (of integers past int64) fails here
     except (ArithmeticError, TypeError, ValueError) as exc:
-        raise ExpressionError(f"numpy cannot evaluate it ({type(exc).__name__}: {' '.join(str(exc).split())})") from None
+        raise ExpressionError(f"numpy cannot evaluate it ({failure(exc)})") from None
     if np.iscomplexobj(sample):
         raise ExpressionError("its values are complex (a root of a negative number?)")
     return g

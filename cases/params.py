@@ -20,6 +20,16 @@ class ParameterError(ValueError):
     """A user mistake in a case name, a key or a value."""
 
 
+def one_line(text) -> str:
+    """``text`` with its whitespace runs (line breaks too) made single spaces."""
+    return " ".join(str(text).split())
+
+
+def failure(exc: BaseException) -> str:
+    """One line naming an exception: its type, and its message where it has one."""
+    return one_line(f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__)
+
+
 #: largest |stress| or modulus (E, tau_s, q), in the case's units
 MAX_STRESS = 1e15
 #: smallest modulus (E, tau_s), in the case's units

@@ -24,7 +24,7 @@ from .case import Case
 from .geometry import (EDGES, PRISM, RING, UNIFORM_SHIFTS, Axis, Cutout, Force, InitialVelocity, Pressure, Probe,
                        Section, Support, Wall)
 from .material import Material
-from .params import COMMON, MAX_STRESS, ParameterError, Spec, validate
+from .params import COMMON, MAX_STRESS, ParameterError, Spec, failure, validate
 
 
 def _scene_keys() -> dict[str, Spec]:
@@ -395,7 +395,7 @@ class _Scene:
                 with np.errstate(all="ignore"):  # an overflow is refused below, not warned of
                     values = np.asarray(numeric(text)(x1, x2, x3, 0.0), float)
             except (ArithmeticError, TypeError, ValueError) as exc:
-                t.fail("pattern", f"{_excerpt(text)} cannot be evaluated inside the body ({type(exc).__name__}: {exc})")
+                t.fail("pattern", f"{_excerpt(text)} cannot be evaluated inside the body ({failure(exc)})")
             bad = ~np.isfinite(values)
             if bad.any():
                 i, j, k = np.argwhere(bad)[0]
@@ -407,7 +407,7 @@ class _Scene:
                 with np.errstate(all="ignore"):  # an overflow is refused below, not warned of
                     value = factor(float(when))
             except (ArithmeticError, TypeError, ValueError) as exc:
-                t.fail("time", f"{_excerpt(time)} cannot be evaluated at t = {when:g} ({type(exc).__name__}: {exc})")
+                t.fail("time", f"{_excerpt(time)} cannot be evaluated at t = {when:g} ({failure(exc)})")
             if not math.isfinite(value):
                 t.fail("time", f"{_excerpt(time)} is not finite at t = {when:g}")
 

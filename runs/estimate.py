@@ -47,6 +47,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cases import ParameterError, rebuild
+from cases.params import failure, one_line
 
 from .errors import probe_error
 from .registry import lookup, solve, solvers
@@ -265,7 +266,7 @@ def estimate(case, solver: str, result, run=solve) -> dict:
             return False
         cpu[c.name] = float(outcome.cpu_time_s)
         if not outcome.converged:
-            failed[c.name] = _one_line(outcome.message or "did not converge")
+            failed[c.name] = one_line(outcome.message or "did not converge")
             return False
         results[c.name] = outcome
         return True
@@ -323,15 +324,6 @@ def estimate(case, solver: str, result, run=solve) -> dict:
     if failed:
         out["failed"] = failed
     return out
-
-
-def _one_line(text: str) -> str:
-    return " ".join(str(text).split())
-
-
-def failure(exc: BaseException) -> str:
-    """One line naming an exception: its type, and its message where it has one."""
-    return _one_line(f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__)
 
 
 def _parts(case, result, cases: dict, by_name: dict, diffs: dict, upward: dict) -> dict:

@@ -23,9 +23,10 @@ import time
 from dataclasses import dataclass, field
 
 from cases import ParameterError, rebuild
+from cases.params import failure
 
 from . import validity
-from .estimate import PARTS, estimate, failure, headline
+from .estimate import PARTS, estimate, headline
 from .registry import solve
 
 #: how much one step of the search may refine a part
