@@ -1,4 +1,4 @@
-"""The five verification scenes as data (docs/scenes.md), and scenes from TOML files
+"""The verification scenes as data (docs/scenes.md), and scenes from TOML files
 (:mod:`cases.scene_file`). No solver imports here.
 
 >>> from cases import get_case
@@ -8,11 +8,11 @@
 
 from pathlib import Path
 
-from . import dome, notched_cylinder, notched_strip, rod_impact, scene_file, thick_cylinder
+from . import dome, layered_cylinder, notched_cylinder, notched_strip, rod_impact, scene_file, thick_cylinder
 from .case import Case
 from .params import ParameterError, UnsupportedCase, parse_sets, validate
 
-_MODULES = (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact)
+_MODULES = (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact, layered_cylinder)
 CASES = {m.NAME: m for m in _MODULES}
 
 

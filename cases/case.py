@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .geometry import PRISM, RING, Force, Cutout, Motion, InitialVelocity, Pressure, Probe, Section, Support, Wall
+from .geometry import PRISM, RING, Force, Cutout, Motion, InitialVelocity, Pressure, Probe, Region, Section, Support, Wall
 from .material import Material
 
 
@@ -17,6 +17,9 @@ class Case:
     ----------
     body : ``'ring'`` or ``'prism'`` (see :mod:`cases.geometry` for coordinates)
     section : cross-section block with the paper's mesh counts (before ``refine``)
+    material : the material of the section outside ``regions``
+    regions : parts of the section of other materials (:class:`cases.geometry.Region`), none
+        overlapping; :attr:`materials` and :meth:`material_index` give every element's
     length : prism length along x3 (ring: 2 pi)
     cutouts : regions of absent material; ``contrast`` scales their stiffness and density
     symmetric : ``True`` when loads and material are symmetric about x3 = 0 (ring), so the
@@ -50,6 +53,7 @@ class Case:
     variation: tuple[tuple[float, int], ...] = ()
     symmetric: bool = True
     axisymmetric: bool = False
+    regions: tuple[Region, ...] = ()
     units: str = "SI (m, N, s, Pa, kg/m^3)"
     provenance: dict = field(default_factory=dict)
     references: dict = field(default_factory=dict)
@@ -58,6 +62,10 @@ class Case:
     def __post_init__(self):
         if self.body not in (RING, PRISM):
             raise ValueError(f"body must be {RING!r} or {PRISM!r}")
+        # the solvers choose their time stepping (linear or the plastic iterations) per case
+        if any(r.material.law != self.material.law for r in self.regions):
+            raise ValueError(f"{self.name}: every region's material must follow the same law "
+                             f"({self.material.law}): all elastic or all plastic")
 
     def variation_factor(self, x3):
         """``1 + sum a cos(m k x3)`` at ``x3`` (1 without a variation)."""
@@ -91,8 +99,30 @@ class Case:
 
     @property
     def cutout_edges(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
-        """The cut-outs' edges along the section's s and t axes (grid nodes at every resolution)."""
-        return (tuple(e for c in self.cutouts for e in c.s_range), tuple(e for c in self.cutouts for e in c.t_range))
+        """The cut-outs' and the regions' box edges along the section's s and t axes (grid
+        nodes at every resolution)."""
+        boxes = [*self.cutouts, *(r for r in self.regions if r.s_range is not None)]
+        return (tuple(e for c in boxes for e in c.s_range), tuple(e for c in boxes for e in c.t_range))
+
+    @property
+    def materials(self) -> tuple:
+        """The section's materials: ``material`` (index 0), then each region's."""
+        return (self.material,) + tuple(r.material for r in self.regions)
+
+    def material_index(self, st=None, region_elements: dict | None = None, n: int | None = None):
+        """Index into :attr:`materials` of each of ``n`` elements: by the parametric centres
+        ``st`` (n, 2) for box regions, by ``region_elements`` (physical surface name -> element
+        ids, a mesh section's) for named ones; 0 outside every region."""
+        import numpy as np
+
+        n = len(st) if st is not None else n
+        index = np.zeros(n, int)
+        for k, r in enumerate(self.regions, start=1):
+            if r.s_range is not None:
+                index[r.contains(st[:, 0], st[:, 1])] = k
+            else:
+                index[np.asarray((region_elements or {})[r.name], int)] = k
+        return index
 
     @property
     def harmonics(self) -> int:

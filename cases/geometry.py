@@ -113,6 +113,26 @@ class Cutout:
 
 
 @dataclass(frozen=True)
+class Region:
+    """A part of the section made of its own material (the case's ``material`` fills the rest).
+
+    On a mapped block it is the parametric box ``s_range`` x ``t_range`` (its limits are grid
+    lines at every resolution); on a mesh section (:mod:`cases.msh_section`) it is the physical
+    surface ``name``, and the ranges are None. It runs all along x3.
+    """
+
+    name: str
+    material: object  # a cases.material.Material (or another law's data)
+    s_range: tuple[float, float] | None = None
+    t_range: tuple[float, float] | None = None
+
+    def contains(self, s, t) -> np.ndarray:
+        """Mask of the parametric points ``(s, t)`` (element centres) inside the box."""
+        s, t = np.asarray(s, float), np.asarray(t, float)
+        return (s > self.s_range[0]) & (s < self.s_range[1]) & (t > self.t_range[0]) & (t < self.t_range[1])
+
+
+@dataclass(frozen=True)
 class Pressure:
     """Pressure (compression positive) normal to the undeformed surface ``edge``.
 

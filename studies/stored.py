@@ -32,7 +32,7 @@ def case_definition(case) -> dict:
     for name in ("title", "provenance", "source", "units", "references"):
         d.pop(name, None)
     d["references"] = {k: case.references[k] for k in TRUTH_REFERENCES if k in case.references}
-    for name in ("forces", "variation", "exact"):  # features a scene may leave out: absent, as before they existed
+    for name in ("forces", "variation", "exact", "regions"):  # features a scene may leave out: absent, as before they existed
         if not d.get(name):
             d.pop(name, None)
     return d
