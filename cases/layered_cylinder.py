@@ -7,9 +7,9 @@ aluminium (E = 7.0e10 Pa, nu = 0.33, rho = 2700 kg/m^3, tau_s = 0.9e8 Pa), bonde
 (compression positive) on the outer surface over |theta| <= 45 deg and |theta - 180 deg| <= 45 deg,
 held from t = 0; elastic q = 1 Pa; dt = 4e-5 s, t_end = 4e-3 s, 8 + 12 elements through the two
 layers, 20 harmonics; probes A, B, C as the thick cylinder's and I on the interface.
-Ours: the plastic load q = 1.2e8 Pa, which yields both layers (the outer under the patches, the
-inner at the bore, :mod:`tests.test_layered`), and the axial element length (one element, as
-long as a radial one of the inner layer).
+Ours: the plastic load q = 5e7 Pa (the thick cylinder's), which yields both layers (peps up to
+about 0.6 % in each by t_end: tests/test_layered.py), and the axial element length (one
+element, as long as a radial one of the inner layer).
 """
 
 import math
@@ -23,7 +23,7 @@ NAME = "layered_cylinder"
 TITLE = "Bonded steel-aluminium cylinder, pressure on two opposite 90 deg patches (plane strain)"
 R1, R_I, R2 = 1.0, 1.4, 2.0
 N_INNER, N_OUTER = 8, 12
-Q_ELASTIC, Q_PLASTIC = 1.0, 1.2e8
+Q_ELASTIC, Q_PLASTIC = 1.0, 5.0e7
 PATCHES = ((-math.pi / 4, math.pi / 4), (3 * math.pi / 4, 5 * math.pi / 4))
 
 DEFAULTS = dict(
@@ -33,14 +33,14 @@ DEFAULTS = dict(
 )
 SPECS = dict(
     COMMON,
-    q=Spec(float, -MAX_STRESS, MAX_STRESS, help="patch pressure, Pa (default 1 elastic, 1.2e8 plastic)"),
+    q=Spec(float, -MAX_STRESS, MAX_STRESS, help="patch pressure, Pa (default 1 elastic, 5e7 plastic)"),
     E_outer=Spec(float, MIN_MODULUS, MAX_STRESS, help="outer layer's Young's modulus, Pa (E, nu, rho, tau_s: the inner's)"),
     nu_outer=COMMON["nu"], rho_outer=COMMON["rho"], tau_s_outer=COMMON["tau_s"],
 )
 PROVENANCE = dict(
     issue="the two layers' radii and materials, the 45 deg patches, q = 1 Pa, dt = 4e-5 s, t_end = 4e-3 s, "
     "8 + 12 elements, 20 Fourier terms, probes A, B, C, I",
-    ours="plastic q = 1.2e8 Pa, axial element length, tol",
+    ours="plastic q = 5e7 Pa, axial element length, tol",
 )
 
 

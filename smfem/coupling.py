@@ -48,14 +48,14 @@ class StackedOperator:
         # stiffness: D B and B' at the section sample points of the cut-out elements, weights per point
         B = sample_operators(model, live)  # (n_modes, ne, ng, 6, d)
         ng, d = B.shape[2], B.shape[4]
-        self.DB = (model.D @ B).reshape(-1, ng * 6, d)
+        self.DB = (model.element_D(live, 1) @ B).reshape(-1, ng * 6, d)
         self.Bt = B.reshape(-1, ng * 6, d).transpose(0, 2, 1).copy()
         self.G = element_scatter(model, live)
         self.Gt = self.G.T.tocsr()
         self.k_weight = (model.ops.sample_weights[live][:, :, None] * excess[:, None, :] * w).reshape(-1, len(x3))  # (ne * ng, nq)
         # mass: each cut-out element's (f - 1) rho to its nodes, by their shares
         nodes, where = np.unique(model.mesh.elements[live], return_inverse=True)
-        share = model.rho * model.ops.node_volume[live][:, :, None] * excess[:, None, :] * w  # (ne, nodes, nq)
+        share = model.element_rho(live, 2) * model.ops.node_volume[live][:, :, None] * excess[:, None, :] * w  # (ne, nodes, nq)
         m_weight = np.zeros((len(nodes), len(x3)))
         np.add.at(m_weight, where.reshape(len(live), -1), share)
         self.m_weight = np.repeat(m_weight, DOFS_PER_NODE, axis=0)  # per node dof

@@ -73,19 +73,21 @@ class ElementOperators:
 
     ``B0 = Ba0 + p Bb0`` etc.; ``sqrt_g`` (n_elements,) is |det J| at the centre, times r_c for
     a ring; ``rotation`` (n_elements, 2, 2) has rows t1, t2; ``free_ratio`` is
-    ``nu / (1 - nu)``, the factor of the free normal strain gradients (module docstring).
+    ``nu / (1 - nu)``, the factor of the free normal strain gradients (module docstring): one
+    number, or (n_elements, 1) on a section of several materials.
     """
 
     Ba: tuple[np.ndarray, np.ndarray, np.ndarray]
     Bb: tuple[np.ndarray, np.ndarray, np.ndarray]
     sqrt_g: np.ndarray
     rotation: np.ndarray
-    free_ratio: float
+    free_ratio: float | np.ndarray
 
     def subset(self, elements: np.ndarray) -> "ElementOperators":
         """The operators of some elements only."""
         return ElementOperators(tuple(a[elements] for a in self.Ba), tuple(b[elements] for b in self.Bb),
-                                self.sqrt_g[elements], self.rotation[elements], self.free_ratio)
+                                self.sqrt_g[elements], self.rotation[elements],
+                                self.free_ratio if np.ndim(self.free_ratio) == 0 else self.free_ratio[elements])
 
     def at(self, p: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(B0, B1, B2)`` for wavenumber ``p``: the rows the scheme drops are zero, except the

@@ -99,7 +99,7 @@ def _elastic_stress(model, amplitudes: list[np.ndarray], x3: np.ndarray) -> np.n
     out = np.zeros((len(x3), mesh.n_elements, 6))
     for s, amp in zip(model.systems, amplitudes):
         B0 = model.ops.strain(fourier.wavenumber(s.mode, body, model.length), 0.0, 0.0)  # (ne, 6, d)
-        a = np.einsum("rs,esk,ek->er", model.D, B0, (s.T @ amp)[dofs], optimize=True)
+        a = np.einsum(f"{'e' * (model.D.ndim - 2)}rs,esk,ek->er", model.D, B0, (s.T @ amp)[dofs], optimize=True)
         psi1, psi3 = fourier.psi(s.mode, x3, body, model.length)
         out += np.where(fourier.ROW_TYPE == 0, psi1[:, None], psi3[:, None])[:, None, :] * a[None]
     if model.case.cutouts:

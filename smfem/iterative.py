@@ -144,7 +144,8 @@ class BlockIterative:
         n_points = int(np.prod(self.points.point_shape[1:]))
         # the contrast material's stiffness is scaled with its factor
         factor = np.broadcast_to(self.points.factor[:, None, :], self.points.point_shape[1:]).ravel()
-        self.law = laws.get(model.case.material, factor)
+        index = np.broadcast_to(model.material_index[:, None, None], self.points.point_shape[1:]).ravel()
+        self.law = laws.for_points(model.case.materials, index, factor)
         self.state = PointState(self.law.initial_state(n_points), np.zeros((6, n_points)))
         self.loads = np.zeros_like(self.Q)  # the committed additional loads F_p
         self.loads_before = self.loads

@@ -16,7 +16,7 @@ from typing import Callable
 
 import numpy as np
 
-from cases.material import ELASTIC, VON_MISES, lame
+from cases.material import ELASTIC, VON_MISES, lame, sigma_y_from_tau_s
 from cases.params import UnsupportedCase
 
 from .constitutive import isotropic_D
@@ -106,6 +106,36 @@ LAWS: dict[str, Callable] = {Elastic.name: Elastic, VonMises.name: VonMises}
 def register(name: str, make: Callable) -> None:
     """Add (or replace) the law ``name``: ``make(material, factor)`` gives its implementation."""
     LAWS[name] = make
+
+
+@dataclass(frozen=True)
+class PointMaterial:
+    """The materials of a section of several, one law, as per-point arrays of their constants
+    (the fields of :class:`cases.material.Material`): a law made from it acts point by point."""
+
+    law: str
+    E: np.ndarray
+    nu: np.ndarray
+    rho: np.ndarray
+    tau_s: np.ndarray
+    E_T: np.ndarray
+
+    @property
+    def sigma_y(self) -> np.ndarray:
+        return sigma_y_from_tau_s(self.tau_s)
+
+    @property
+    def hardening_modulus(self) -> np.ndarray:
+        return np.where(self.E_T > 0, self.E * self.E_T / np.where(self.E_T > 0, self.E - self.E_T, 1.0), 0.0)
+
+
+def for_points(materials, index: np.ndarray, factor=1.0):
+    """The law of points made of ``materials[index]`` (one law: :class:`cases.case.Case` checks
+    it); a single material's law as :func:`get` makes it."""
+    if len(materials) == 1:
+        return get(materials[0], factor)
+    fields = {name: np.array([getattr(m, name) for m in materials])[index] for name in ("E", "nu", "rho", "tau_s", "E_T")}
+    return get(PointMaterial(materials[0].law, **fields), factor)
 
 
 def get(material, factor=1.0):

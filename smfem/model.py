@@ -70,12 +70,21 @@ class Model:
         if self.mesh.elements.shape[1] != self.element.nodes:
             raise ModelError(f"{case.name}: element {element!r} has {self.element.nodes} nodes, the section mesh's "
                              f"elements {self.mesh.elements.shape[1]}")
-        self.ops: elements.Operators = self.element.operators(self.mesh.element_x(), case.body, case.material.nu)
         mat = case.material
+        #: each element's index into ``case.materials`` (0 everywhere without regions)
+        self.material_index = case.material_index(st=self.mesh.element_st_centres())
         #: SMFEM's implementation of the material's law (an unknown one is refused here)
         self.law = laws.get(mat)
+        #: the elasticity matrix and density: one (6, 6) and a number on a section of one material,
+        #: per element (ne, 6, 6) and (ne,) on one of several (:meth:`element_D`, :meth:`element_rho`)
         self.D = self.law.elastic_matrix()
         self.rho = mat.rho
+        nu = mat.nu
+        if case.regions:
+            self.D = np.stack([laws.get(m).elastic_matrix() for m in case.materials])[self.material_index]
+            self.rho = np.array([m.rho for m in case.materials])[self.material_index]
+            nu = np.array([m.nu for m in case.materials])[self.material_index][:, None]
+        self.ops: elements.Operators = self.element.operators(self.mesh.element_x(), case.body, nu)
         self.inhomogeneous = (bool(case.cutouts) and case.contrast < 1.0) or bool(case.variation)
         n_harm = case.harmonics
         families = ("c", "s") if case.body == RING else ("p",)
@@ -133,6 +142,16 @@ class Model:
         self.offsets = np.cumsum([0] + [s.T.shape[1] for s in self.systems])
         self.coupled_mass = self._coupled_mass()
 
+    def element_D(self, elements=None, spread: int = 0) -> np.ndarray:
+        """The elasticity matrix of ``elements`` (all: None), (n, 6, 6) with ``spread`` unit axes
+        after the first (to broadcast against per-point arrays), or the section's one (6, 6)."""
+        return self.D if self.D.ndim == 2 else _spread(self.D if elements is None else self.D[elements], spread)
+
+    def element_rho(self, elements=None, spread: int = 0):
+        """The density of ``elements`` (all: None), (n,) with ``spread`` unit axes after it, or
+        the section's one number."""
+        return self.rho if np.ndim(self.rho) == 0 else _spread(self.rho if elements is None else self.rho[elements], spread)
+
     def mass_matrix(self):
         """Stacked mass of all modes: the diagonal (n,) when the modes decouple, else the sparse
         matrix with the mass coupling rho(lm)."""
@@ -187,7 +206,7 @@ class Model:
         live = self.cutout_elements
         nodes, where = np.unique(self.mesh.elements[live], return_inverse=True)
         share = np.zeros((len(nodes), len(live)))
-        np.add.at(share, (where.reshape(live.size, -1), np.arange(len(live))[:, None]), self.rho * self.ops.node_volume[live])
+        np.add.at(share, (where.reshape(live.size, -1), np.arange(len(live))[:, None]), self.element_rho(live, 1) * self.ops.node_volume[live])
         dofs = assembly.node_dofs(nodes).reshape(-1, 1)  # (n_dofs, 1): a 1 x 1 block per dof
 
         def blocks(pairs):
@@ -229,11 +248,11 @@ class Model:
         C, terms = [], []
         for a in (0, 1):
             for b in (0, 1):
-                D = self.D * np.outer(fourier.ROW_TYPE == a, fourier.ROW_TYPE == b)
+                D = self.element_D(live) * np.outer(fourier.ROW_TYPE == a, fourier.ROW_TYPE == b)
                 if not D.any():
                     continue
                 for left, right, powers in ((Ba, Ba, (0, 0)), (Bb, Ba, (1, 0)), (Ba, Bb, (0, 1)), (Bb, Bb, (1, 1))):
-                    C.append(np.einsum("eg,egri,rs,egsj->eij", weights, left, D, right, optimize=True))
+                    C.append(np.einsum(f"eg,egri,{'e' * (D.ndim - 2)}rs,egsj->eij", weights, left, D, right, optimize=True))
                     terms.append((a, b) + powers)
         d = self.element.dofs
         C = np.stack(C, axis=1).reshape(len(live), len(terms), d * d)
@@ -282,7 +301,7 @@ class Model:
     def full_mass(self, i: int, j: int, homogeneous: bool = False) -> np.ndarray:
         """Unconstrained lumped mass diagonal (3 n_nodes,) of block ``(i, j)``."""
         I = self.integrals(i, j, homogeneous=homogeneous)
-        rho_int = self.rho * np.stack([I[:, 0, 0], I[:, 1, 1]], axis=1)
+        rho_int = self.element_rho(spread=1) * np.stack([I[:, 0, 0], I[:, 1, 1]], axis=1)
         return assembly.lumped_mass(self.ops.node_volume, rho_int, self.mesh.elements, self.mesh.n_nodes)
 
     @cached_property
@@ -304,3 +323,8 @@ class Model:
 
     def harmonics_used(self) -> list[str]:
         return [str(m) for m in self.modes]
+
+
+def _spread(values: np.ndarray, axes: int) -> np.ndarray:
+    """Per-element ``values`` (n, ...) with ``axes`` unit axes inserted after the first."""
+    return values.reshape(values.shape[:1] + (1,) * axes + values.shape[1:])

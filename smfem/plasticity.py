@@ -56,7 +56,8 @@ def wilkins(trial: np.ndarray, alpha: np.ndarray, mu: np.ndarray, sigma_y0: floa
     trial : (..., 6) trial stresses ``sigma_n + D d_eps``
     alpha : (...) accumulated equivalent plastic strain at the start of the step
     mu : (...) shear modulus at each point (the contrast material's is scaled)
-    sigma_y0, H : initial yield stress in tension and the plastic modulus
+    sigma_y0, H : initial yield stress in tension and the plastic modulus: numbers, or per
+        point (n,) arrays in :func:`return_map_rows`
 
     Returns
     -------
@@ -83,10 +84,12 @@ def return_map_rows(trial: np.ndarray, alpha: np.ndarray, mu: np.ndarray, sigma_
     of the yielding points and their plastic strain increments ``(6, n_yielding)``.
     """
     T2 = _shear_squared(trial)
-    limit = sigma_y0 + H * alpha if H else sigma_y0
+    limit = sigma_y0 + H * alpha if np.any(H) else sigma_y0
     at = np.flatnonzero(3.0 * T2 > limit * limit)
     if not len(at):
         return trial, alpha, at, np.zeros((6, 0))
+    # per-point constants (a section of several materials) at the yielding points only
+    sigma_y0, H = (v if np.ndim(v) == 0 else v[at] for v in (sigma_y0, H))
     s, a, deps_p = _radial_return(trial[:, at], SQRT3 * np.sqrt(T2[at]), alpha[at], mu[at], sigma_y0, H)
     sigma, alpha = trial.copy(), alpha.copy()
     sigma[:, at], alpha[at] = s, a

@@ -131,7 +131,7 @@ class ProbeSet:
                 p = fourier.wavenumber(s.mode, m.body, m.length)
                 eps = m.ops.subset([e]).strain(p, xi, eta)[0] * np.where(fourier.ROW_TYPE == 0, psi1, psi3)[:, None]
                 w = stress_component_weights(m.ops.rotation[e], probe.component)
-                row[dofs] = w @ m.D @ eps
+                row[dofs] = w @ m.element_D([e]).reshape(-1, 6, 6)[0] @ eps
             out.append(row)
         return out
 

@@ -141,7 +141,7 @@ class SamplePoints:
         n_modes, ne, ng = self.shape
         d = B.shape[-1]
         # D B for the stresses of the amplitudes; B' weighted by the point's volume for the forces
-        self.DB = (model.D @ B).reshape(n_modes * ne, ng * 6, d)
+        self.DB = (model.element_D(spread=1) @ B).reshape(n_modes * ne, ng * 6, d)
         self.Bt = (B * model.ops.sample_weights[None, :, :, None, None]).reshape(n_modes * ne, ng * 6, d).transpose(0, 2, 1).copy()
         self.G = element_scatter(model)
         self.Gt = self.G.T.tocsr()

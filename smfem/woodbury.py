@@ -112,8 +112,9 @@ class CutoutWoodbury:
             raise ValueError("a strain row mixes basis types: no nodal form along x3")
         Bb = Bb * sign[fourier.ROW_TYPE][:, comp_type]
         B = np.concatenate([Ba, Bb], axis=3)  # (ne, ng, 6, 2 d): on (U_e, U'_e)
-        k = np.einsum("eg,egri,rs,egsj->eij", ops.sample_weights, B, model.D, B, optimize=True)
-        k[:, np.arange(d), np.arange(d)] += a0 * model.rho * np.repeat(ops.node_volume, DOFS_PER_NODE, axis=1)  # lumped mass on U
+        D = model.element_D(live)
+        k = np.einsum(f"eg,egri,{'e' * (D.ndim - 2)}rs,egsj->eij", ops.sample_weights, B, D, B, optimize=True)
+        k[:, np.arange(d), np.arange(d)] += a0 * model.element_rho(live, 1) * np.repeat(ops.node_volume, DOFS_PER_NODE, axis=1)  # lumped mass on U
         # scatter each element's (U_e, U'_e) into the cut-out dofs' (U, U'), (f - 1)-weighted per
         # point: H_q = sum_e excess[e, q] k_e, one sparse product over all elements
         n = len(dofs)
