@@ -99,6 +99,12 @@ class Section:
         """Parametric edge (one of EDGES) for a named edge or a parametric name."""
         return name if name in EDGES else self.edges[name]
 
+    def mesh(self, scale: float = 1, extra=((), ()), order: int = 1):
+        """The section protocol (:mod:`cases.section_mesh`): the block's structured mesh."""
+        from .section_mesh import block_mesh
+
+        return block_mesh(self, scale, extra, order)
+
 
 @dataclass(frozen=True)
 class Cutout:

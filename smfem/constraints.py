@@ -13,7 +13,7 @@ import scipy.sparse as sp
 from cases.geometry import RING
 
 from .fourier import Mode, absent_components
-from .mesh import SectionMesh
+from cases.section_mesh import SectionMesh
 
 
 def fixed_dofs(case, mesh: SectionMesh) -> np.ndarray:

@@ -21,7 +21,7 @@ could pull its centre open (the switch is not monotone), and a point at the edge
 zone flipped between open and closed for ever (seen on the tilted wall). At the Gauss points
 the layer's energy is a sum of point terms with positive weights, convex without friction.
 
-The layer element follows the face's segments (:meth:`smfem.mesh.SectionMesh.edge_segments`):
+The layer element follows the face's segments (:meth:`cases.section_mesh.SectionMesh.edge_segments`):
 
 * 2-node segments (a 4-node body): the moment scheme's 4-node element, its points the 2 Gauss
   points along the face (:func:`moment_layer`);

@@ -76,7 +76,7 @@ class Element:
     operators : ``(X (ne, nodes, 2), body, nu) -> Operators``
     sample_interpolation : ``(xi, eta) -> (ng,)`` weights that interpolate values at the
         sample points to a local point (the plastic strain probes)
-    mesh_order : the section mesh it needs (:func:`smfem.mesh.section_mesh`): 1, the 4 corners;
+    mesh_order : the section mesh it needs (:func:`cases.section_mesh.section_mesh`): 1, the 4 corners;
         2, the 9 nodes of the mesh refined once in (s, t)
     """
 

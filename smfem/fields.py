@@ -15,7 +15,7 @@ from .assembly import element_dofs
 #: meshio's cell type per section mesh order (VTK_HEXAHEDRON = 12, VTK_TRIQUADRATIC_HEXAHEDRON = 29)
 HEX_TYPE = {1: "hexahedron", 2: "hexahedron27"}
 #: per section mesh order, each VTK hexahedron node's section node (in the element's node order,
-#: :class:`smfem.mesh.SectionMesh`) and station (0 bottom ... order top, along x3). Order 2 is
+#: :class:`cases.section_mesh.SectionMesh`) and station (0 bottom ... order top, along x3). Order 2 is
 #: VTK's triquadratic hexahedron: the bottom and top faces' corners (0-3, 4-7) and mid-sides
 #: (8-11, 12-15), the middle station's corners (16-19), its mid-sides on the faces xi = 0, xi = 1,
 #: eta = 0, eta = 1 (20-23: the section's mid-sides 3-0, 1-2, 0-1, 2-3), then the bottom, top and

@@ -10,7 +10,7 @@ from . import quad9
 from .elements import Element
 from .fourier import Mode, psi_integrals, psi_squared_integrals
 from .fourier import psi as psi_values
-from .mesh import SectionMesh
+from cases.section_mesh import SectionMesh
 
 
 def edge_pressure_vector(mesh: SectionMesh, edge: str, body: str) -> np.ndarray:

@@ -20,7 +20,7 @@ from cases.geometry import RING
 from cases.params import UnsupportedCase
 
 from . import assembly, constraints, elements, fourier, inhomogeneity, laws, loads, symmetry
-from .mesh import SectionMesh, section_mesh
+from cases.section_mesh import SectionMesh, section_mesh
 
 
 #: harmonic pairs assembled per batch by :meth:`Model.coupled_stiffness` (bounds its memory)

@@ -12,7 +12,7 @@ import scipy.sparse as sp
 from . import fourier
 from .assembly import element_dofs
 from .elements import Element
-from .mesh import SectionMesh
+from cases.section_mesh import SectionMesh
 from .model import ModelError
 
 

@@ -6,7 +6,7 @@ biquadratic space under any bilinear (non-affine) map of the section, where the 
 element loses completeness and accuracy on distorted meshes; its lumped masses (the row sums
 ``int N_i dV``: 1/36, 4/36, 16/36 of a parallelogram) are all positive, where the serendipity
 element's corners get negative ones; and its nodes are the tensor-product grid of the section
-refined once in (s, t) (:func:`smfem.mesh.section_mesh` with ``order=2``), so supports, edges and
+refined once in (s, t) (:func:`cases.section_mesh.section_mesh` with ``order=2``), so supports, edges and
 curved boundaries come for free.
 
 Why full 3 x 3 integration: 2 x 2 reduced integration of the Lagrange element has spurious

@@ -11,7 +11,7 @@ import scipy.sparse.linalg as sla
 from cases import get_case
 from cases.geometry import RING, Axis, Pressure, Section, Support
 from smfem import assembly, element, elements, fourier
-from smfem.mesh import section_mesh
+from cases.section_mesh import section_mesh
 from smfem.model import Model
 
 class FullBilinearOperators:

@@ -9,7 +9,7 @@ from smfem import element
 from smfem.assembly import assemble, weighted_elasticity
 from smfem.constitutive import isotropic_D
 from smfem.fourier import Mode
-from smfem.mesh import section_mesh
+from cases.section_mesh import section_mesh
 from cases.geometry import Axis, Section
 
 D = isotropic_D(2.1e11, 0.3)

@@ -1,14 +1,23 @@
-"""Structured cross-section meshes generated from a case's section block: 4-node elements, or
-(``order=2``) 9-node ones on the grid refined once in (s, t), whose mid-side nodes lie on the
-section's curved edges (they are mapped from (s, t) like the corners)."""
+"""The section protocol: what every solver reads of a cross-section, whatever made it.
+
+A section (:class:`cases.geometry.Section`, a mapped block; :class:`cases.msh_section.MeshSection`,
+a gmsh mesh) gives, through its ``mesh(scale, extra, order)``, a :class:`SectionMesh`: nodes,
+quadrilaterals of 4 nodes or (``order=2``) 9, named edges as segments with the element each
+belongs to, named regions, and parametric coordinates (s, t) of the nodes (a mesh section's are
+its (x1, x2)). No solver builds a section's mesh itself.
+
+A mapped block's mesh is structured: 4-node elements, or 9-node ones on the grid refined once in
+(s, t), whose mid-side nodes lie on the section's curved edges (they are mapped from (s, t)
+like the corners)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from cases.geometry import Section
+from .geometry import Section
+from .params import UnsupportedCase
 
 
 @dataclass(frozen=True)
@@ -19,19 +28,24 @@ class SectionMesh:
     ----------
     x : (n_nodes, 2) section coordinates (x1, x2) of the nodes
     st : (n_nodes, 2) parametric coordinates (s, t) of the nodes
-    elements : (n_elements, nodes) node indices: the corners counter-clockwise in (s, t) first
+    elements : (n_elements, nodes) node indices: the corners counter-clockwise first
         (order 2: then the mid-sides of edges 0-1, 1-2, 2-3, 3-0 and the centre)
-    shape : (n_s, n_t) numbers of elements along s and t
-    section : the block it was generated from
-    order : 1 (corner nodes) or 2 (the grid refined once: 9 nodes per element)
+    shape : (n_s, n_t) numbers of elements along s and t of a mapped block; None for a mesh
+    section : the section it was generated from
+    order : 1 (corner nodes) or 2 (9 nodes per element)
+    edges : a mesh section's named edges: name -> (segments (n_seg, order + 1), owners (n_seg,))
+        (:meth:`edge_segments`); a mapped block's come from its grid
+    regions : a mesh section's physical surfaces: name -> element ids
     """
 
     x: np.ndarray
     st: np.ndarray
     elements: np.ndarray
-    shape: tuple[int, int]
-    section: Section
+    shape: tuple[int, int] | None
+    section: object
     order: int = 1
+    edges: dict = field(default_factory=dict)
+    regions: dict = field(default_factory=dict)
 
     @property
     def n_nodes(self) -> int:
@@ -50,7 +64,10 @@ class SectionMesh:
         return self.st[self.elements[:, :4]].mean(axis=1)
 
     def edge_nodes(self, name: str) -> np.ndarray:
-        """Nodes on a named edge, ordered along it (mid-side nodes included)."""
+        """Nodes on a named edge (mid-side nodes included): a mapped block's ordered along it,
+        a mesh section's by number."""
+        if self.shape is None:
+            return np.unique(self.edge_segments(name)[0])
         ns, nt = self.shape
         grid = np.arange(self.n_nodes).reshape(self.order * nt + 1, self.order * ns + 1)  # [t index, s index]
         edge = self.section.edge(name)
@@ -59,6 +76,10 @@ class SectionMesh:
     def edge_segments(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """Segments ``(n_seg, order + 1)`` of an edge's nodes, ordered along it (a quadratic
         segment's mid-side node in the middle), and the element each belongs to."""
+        if self.shape is None:
+            if name not in self.edges:
+                raise UnsupportedCase(f"the section mesh has no edge {name!r} (its physical curves: {', '.join(self.edges)})")
+            return self.edges[name]
         nodes = self.edge_nodes(name)
         k = self.order
         seg = np.column_stack([nodes[j:len(nodes) - k + j:k] for j in range(k + 1)])
@@ -89,7 +110,14 @@ def _refined(grid: np.ndarray, order: int) -> np.ndarray:
     return np.append(inner.ravel(), grid[-1])
 
 
-def section_mesh(section: Section, scale: float = 1, extra=((), ()), order: int = 1) -> SectionMesh:
+def section_mesh(section, scale: float = 1, extra=((), ()), order: int = 1) -> SectionMesh:
+    """The mesh of any section (the protocol's one entry): ``scale`` times its element counts
+    (a mesh section: an integer, each element split scale x scale), the ``extra`` (s, t) points
+    of a mapped block as grid nodes, elements of 4 nodes or (``order=2``) 9."""
+    return section.mesh(scale, extra, order)
+
+
+def block_mesh(section: Section, scale: float = 1, extra=((), ()), order: int = 1) -> SectionMesh:
     """Tensor-product mesh of the block, each graded segment split ``scale`` times more, with
     the ``extra`` (s, t) points (the cut-outs' edges) as nodes (:meth:`cases.geometry.Axis.grid`);
     ``order=2``: the same elements with 9 nodes each (mid-sides and centre at the middles in (s, t))."""
