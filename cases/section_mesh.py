@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .geometry import Section
 from .params import UnsupportedCase
 
 
@@ -117,7 +116,7 @@ def section_mesh(section, scale: float = 1, extra=((), ()), order: int = 1) -> S
     return section.mesh(scale, extra, order)
 
 
-def block_mesh(section: Section, scale: float = 1, extra=((), ()), order: int = 1) -> SectionMesh:
+def block_mesh(section, scale: float = 1, extra=((), ()), order: int = 1) -> SectionMesh:
     """Tensor-product mesh of the block, each graded segment split ``scale`` times more, with
     the ``extra`` (s, t) points (the cut-outs' edges) as nodes (:meth:`cases.geometry.Axis.grid`);
     ``order=2``: the same elements with 9 nodes each (mid-sides and centre at the middles in (s, t))."""

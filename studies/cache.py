@@ -42,7 +42,7 @@ PRESENTATION = {"runs/figures.py", "runs/progress.py", "runs/estimate.py", "runs
 
 @functools.cache
 def code_version(solver: str) -> str:
-    """sha256 (16 hex digits) of the ``.py`` and ``.csv`` files of the packages ``solver``
+    """sha256 (16 hex digits) of the ``.py``, ``.csv`` and ``.msh`` files of the packages ``solver``
     depends on (``cases/x3_points.csv`` sets SMFEM's stress points: a new table reruns them)."""
     h = hashlib.sha256()
     for package in (*lookup(solver).packages, *SHARED_SOURCES):
@@ -55,7 +55,7 @@ def code_version(solver: str) -> str:
 def source_files(package: str) -> list[tuple[Path, Path]]:
     """``(package root, file)`` of the files of ``package`` that decide a run's results."""
     root = Path(importlib.util.find_spec(package).submodule_search_locations[0])
-    return [(root, path) for path in sorted(p for p in root.rglob("*") if p.suffix in (".py", ".csv"))
+    return [(root, path) for path in sorted(p for p in root.rglob("*") if p.suffix in (".py", ".csv", ".msh"))
             if f"{package}/{path.relative_to(root)}" not in PRESENTATION]
 
 
