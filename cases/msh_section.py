@@ -165,6 +165,37 @@ class MeshSection:
     def __hash__(self):
         return hash((self.source_order, self.elements.shape, self.elements.tobytes()))
 
+    def mesh(self, scale: float = 1, extra=((), ()), order: int = 1):
+        """The section protocol (:mod:`cases.section_mesh`): this mesh split ``scale`` x ``scale``."""
+        from .section_mesh import unstructured_mesh
+
+        return unstructured_mesh(self, scale, extra, order)
+
+    @staticmethod
+    def to_x(s, t):
+        """A mesh section's parametric coordinates are its section coordinates."""
+        return np.asarray(s, float), np.asarray(t, float)
+
+    from_x = to_x
+
+    def edge(self, name: str) -> str:
+        """The physical curve ``name`` (edges are named by the mesh, not by parametric sides)."""
+        return name
+
+    def digest(self) -> str:
+        """sha256 (16 hex digits) of the nodes, elements, edges and regions: what a stored
+        truth's key holds of the section (an array's text is cut short by numpy)."""
+        import hashlib
+
+        h = hashlib.sha256()
+        for a in (self.x, self.elements):
+            h.update(np.ascontiguousarray(a).tobytes())
+        for table in (self.edges, self.edge_owner, self.regions):
+            for name in sorted(table):
+                h.update(name.encode())
+                h.update(np.ascontiguousarray(table[name], np.int64).tobytes())
+        return h.hexdigest()[:16]
+
     @property
     def bounds(self) -> tuple[tuple[float, float], tuple[float, float]]:
         """``((x1min, x1max), (x2min, x2max))`` of the nodes."""

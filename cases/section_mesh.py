@@ -137,3 +137,16 @@ def block_mesh(section, scale: float = 1, extra=((), ()), order: int = 1) -> Sec
     if np.all(area2 < 0):
         elements = elements[:, MIRRORED[order]]
     return SectionMesh(x, np.column_stack([S.ravel(), T.ravel()]), elements, (ns, nt), section, order)
+
+
+def unstructured_mesh(section, scale: float = 1, extra=((), ()), order: int = 1) -> SectionMesh:
+    """The mesh of a mesh section (:class:`cases.msh_section.MeshSection`): each element split
+    ``scale`` x ``scale`` (a whole number: a mesh cannot be coarsened), with 4 or 9 nodes. Its
+    parametric coordinates are (x1, x2); ``extra`` grid points mean nothing to it."""
+    k = int(round(scale))
+    if k < 1 or abs(scale - k) > 1e-9:
+        raise UnsupportedCase(f"a mesh section is refined by a whole factor (refine = k splits each element k x k); "
+                              f"it cannot be coarsened or scaled by {scale:g}")
+    fine = section.refined(k)
+    x, elements, edges = fine.at_order(order)
+    return SectionMesh(x, x.copy(), elements, None, section, order, edges, dict(fine.regions))

@@ -72,7 +72,7 @@ class Model:
                              f"elements {self.mesh.elements.shape[1]}")
         mat = case.material
         #: each element's index into ``case.materials`` (0 everywhere without regions)
-        self.material_index = case.material_index(st=self.mesh.element_st_centres())
+        self.material_index = case.material_index(st=self.mesh.element_st_centres(), region_elements=self.mesh.regions)
         #: SMFEM's implementation of the material's law (an unknown one is refused here)
         self.law = laws.get(mat)
         #: the elasticity matrix and density: one (6, 6) and a number on a section of one material,
