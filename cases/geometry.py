@@ -99,6 +99,23 @@ class Section:
         """Parametric edge (one of EDGES) for a named edge or a parametric name."""
         return name if name in EDGES else self.edges[name]
 
+    def inside(self, n: int = 7):
+        """The section protocol: ``(x1, x2)`` of n x n points inside the block, off its edges
+        and the axis (as quadrature points are), shape (n, n)."""
+        (s0, s1), (t0, t1) = self.s.span, self.t.span
+        f = (np.arange(n) + 0.5) / n
+        return self.to_x(s0 + (s1 - s0) * f[:, None], t0 + (t1 - t0) * f[None, :])
+
+    def contains(self, x1: float, x2: float) -> bool:
+        """The section protocol: whether section point ``(x1, x2)`` lies in the block (to round-off)."""
+        s, t = (float(v) for v in self.from_x(x1, x2))
+        for value, axis in ((s, self.s), (t, self.t)):
+            lo, hi = axis.span
+            slack = 1e-9 * max(abs(lo), abs(hi), hi - lo)
+            if not lo - slack <= value <= hi + slack:
+                return False
+        return True
+
     def mesh(self, scale: float = 1, extra=((), ()), order: int = 1):
         """The section protocol (:mod:`cases.section_mesh`): the block's structured mesh."""
         from .section_mesh import block_mesh

@@ -66,8 +66,11 @@ def forces_invariant(forces, section, period: float, x3_image, signs=(1.0, 1.0, 
     the identity with sign -1 on it asks whether that component is zero), tried at sample points
     of ``section`` and along ``period``."""
     rng = np.random.default_rng(1)
-    (s0, s1), (t0, t1) = section.s.span, section.t.span
-    x1, x2 = section.to_x(s0 + (s1 - s0) * rng.random(5), t0 + (t1 - t0) * rng.random(5))
+    if getattr(section, "kind", "") == "mesh":
+        x1, x2 = section.inside(3)
+    else:
+        (s0, s1), (t0, t1) = section.s.span, section.t.span
+        x1, x2 = section.to_x(s0 + (s1 - s0) * rng.random(5), t0 + (t1 - t0) * rng.random(5))
     x3 = (np.arange(97) + 0.5 * 2 ** 0.5) * period / 97  # off any simple fraction of the period
     x1, x2, x3 = np.asarray(x1)[:, None], np.asarray(x2)[:, None], x3[None, :]
     for force in forces:

@@ -171,6 +171,26 @@ class MeshSection:
 
         return unstructured_mesh(self, scale, extra, order)
 
+    def inside(self, n: int = 7):
+        """The section protocol: ``(x1, x2)`` of about n x n points inside the section (the
+        centres of elements spread over it), flat arrays."""
+        centres = self.x[self.elements[:: max(1, len(self.elements) // (n * n)), 8]]
+        return centres[:, 0], centres[:, 1]
+
+    def contains(self, x1: float, x2: float) -> bool:
+        """The section protocol: whether section point ``(x1, x2)`` lies in the section (to round-off)."""
+        try:
+            self.locate(np.array([x1], float), np.array([x2], float))
+        except ValueError:
+            return False
+        return True
+
+    @property
+    def smallest_dimension(self) -> float:
+        """The smaller extent of the section's bounding box."""
+        (a, b), (c, d) = self.bounds
+        return min(b - a, d - c)
+
     @staticmethod
     def to_x(s, t):
         """A mesh section's parametric coordinates are its section coordinates."""

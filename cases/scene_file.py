@@ -7,6 +7,8 @@ overrides by :func:`cases.params.validate`, the one path of ``--set``. Any numbe
 may be written as the name of a parameter in quotes (``q = "q"``, ``value = "-v0"``): it then
 follows ``--set``.
 
+An angle may name a parameter in degrees: ``"patch_deg deg"`` is its value in radians.
+
 Every mistake in a file is a :class:`ParameterError` of one line that names the file and the
 key (``scene.toml: section.s.counts: ...``); unknown keys are refused. No solver imports here.
 """
@@ -19,18 +21,18 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import dome, notched_cylinder, notched_strip, rod_impact, thick_cylinder
+from . import dome, flywheel, layered_cylinder, notched_cylinder, notched_strip, rod_impact, thick_cylinder
 from .case import Case
 from .geometry import (EDGES, PRISM, RING, UNIFORM_SHIFTS, Axis, Cutout, Force, InitialVelocity, Pressure, Probe,
-                       Section, Support, Wall)
+                       Region, Section, Support, Wall)
 from .material import Material
-from .params import COMMON, MAX_STRESS, ParameterError, Spec, failure, validate
+from .params import COMMON, MAX_STRESS, ParameterError, Spec, UnsupportedCase, failure, validate
 
 
 def _scene_keys() -> dict[str, Spec]:
     """The built-in scenes' own keys (q, contrast, notch_depth, v0, gap, ...) with their ranges."""
     keys: dict[str, Spec] = {}
-    for module in (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact):
+    for module in (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact, layered_cylinder, flywheel):
         keys.update({k: spec for k, spec in module.SPECS.items() if k not in COMMON and k not in keys})
     return keys
 
@@ -45,7 +47,9 @@ BOUND = {"contrast": "cutout", "layer_thickness": "wall", "layer_stiffness": "wa
 FEATURES = {"cutout": "[[cutout]]", "wall": "[wall]"}
 
 TOP = ("name", "title", "body", "units", "length", "symmetric", "axisymmetric", "params", "material",
-       "section", "load", "body_force", "traction", "support", "cutout", "initial_velocity", "wall", "probe", "references")
+       "section", "region", "load", "body_force", "traction", "support", "cutout", "initial_velocity", "wall", "probe",
+       "references")
+REGION_KEYS = ("name", "E", "nu", "rho", "tau_s", "E_T", "s_range", "t_range")
 PROBE_KEYS = ("name", "kind", "field", "component", "point", "edge")
 #: probe kind -> the fields it may record
 PROBE_FIELDS = {"point": ("u", "v", "sigma", "peps"), "max": ("peps",), "edge_mean": ("sigma",),
@@ -203,8 +207,10 @@ class _Scene:
         return f"{where}.{key}" if where else key
 
     def parameter(self, table: _Table, key: str, text: str) -> float:
-        """The value of the parameter that ``text`` names, negated for a leading ``-``."""
-        sign, name = (-1.0, text[1:]) if text.startswith("-") else (1.0, text)
+        """The value of the parameter that ``text`` names, negated for a leading ``-``, in
+        radians for a trailing `` deg`` (an angle given in degrees: ``"patch_deg deg"``)."""
+        scale, text = (math.pi / 180, text[:-4].rstrip()) if text.endswith(" deg") else (1.0, text)
+        sign, name = (-scale, text[1:]) if text.startswith("-") else (scale, text)
         value = self.params.get(name)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             numeric = ", ".join(k for k, v in self.params.items() if not isinstance(v, bool))
@@ -230,7 +236,7 @@ class _Scene:
             top.fail("length", "a ring goes 2 pi round: length is for body = \"prism\" only")
         else:
             self.length = TWO_PI
-        self.section = self.read_section(top.table("section", ("kind", "s", "t", "edges")))
+        self.section = self.read_section(top.table("section", ("kind", "s", "t", "edges", "file")))
         material = top.table("material", ("E_T", "variation"), default={},
                              hint=" (E, nu, rho, tau_s and plastic are parameters: give them in [params])")
         E_T = material.number("E_T", 0.0, lo=0.0)
@@ -241,6 +247,7 @@ class _Scene:
         forces = tuple(self.read_force(t) for t in top.tables("body_force", ("pattern", "time"))) + \
             tuple(self.read_force(t, self.edge(t, "edge")) for t in top.tables("traction", ("edge", "pattern", "time")))
         cutouts = tuple(self.read_cutout(t) for t in top.tables("cutout", ("s_range", "t_range", "x3_intervals")))
+        regions = self.read_regions(top.tables("region", REGION_KEYS))
         wall = self.read_wall(top.table("wall", ("edge", "gap", "friction", "slope"))) if features["wall"] else None
         probes = tuple(self.read_probe(t) for t in top.tables("probe", PROBE_KEYS))
         if not probes:
@@ -252,7 +259,7 @@ class _Scene:
             probes=probes, params=p, length=self.length, cutouts=tuple(c for c in cutouts if c is not None),
             contrast=p.get("contrast", 1.0),
             initial_velocity=tuple(self.read_velocity(t) for t in top.tables("initial_velocity", ("component", "value"))),
-            wall=wall, forces=forces, variation=variation,
+            wall=wall, forces=forces, variation=variation, regions=regions,
             units=top.string("units", Case.__dataclass_fields__["units"].default),
             references=self.read_references(top, probes), source=source,
             **self.read_symmetry(top, loads, cutouts, wall, forces, variation),
@@ -290,8 +297,12 @@ class _Scene:
             if not features[BOUND[key]]:
                 table.fail(key, f"the scene has no {FEATURES[BOUND[key]]} to use it")
 
-    def read_section(self, t: _Table) -> Section:
-        kind = t.string("kind", choices=("rect", "polar"))
+    def read_section(self, t: _Table):
+        kind = t.string("kind", choices=("rect", "polar", "mesh"))
+        if kind == "mesh":
+            return self.read_mesh_section(t)
+        if t.has("file"):
+            t.fail("file", f"for kind = \"mesh\" only (a {kind} block is given by s, t and edges)")
         s, tt = self.read_axis(t, "s"), self.read_axis(t, "t")
         if kind == "polar" and s.breaks[0] <= 0:
             t.fail("s.breaks", f"{s.breaks[0]!r}: a polar section's radius s must be > 0")
@@ -307,6 +318,64 @@ class _Scene:
                                  + ", ".join(EDGES))
         return Section(kind, s, tt, dict(edges.data))
 
+    def read_mesh_section(self, t: _Table):
+        """``kind = "mesh"``: a gmsh mesh ``file`` (relative to the scene file), read and checked
+        by :func:`cases.msh_section.read_msh`; its physical curves name the edges."""
+        from .msh_section import read_msh
+
+        for key in ("s", "t", "edges"):
+            if t.has(key):
+                t.fail(key, "not for kind = \"mesh\": the mesh's physical curves name its edges")
+        name = t.string("file")
+        path = Path(name) if Path(name).is_absolute() else Path(self.file).parent / name
+        if path.suffix.lower() != ".msh":
+            t.fail("file", f"{name!r}: give a gmsh mesh file (.msh)")
+        try:
+            return read_msh(path, self.body)
+        except (ParameterError, UnsupportedCase) as exc:
+            t.fail("file", str(exc))
+
+    def read_regions(self, tables: list[_Table]) -> tuple[Region, ...]:
+        """``[[region]]``: a part of the section of its own material (the other constants as the
+        body's, ``[params]``): a physical surface ``name`` of a mesh section, or on a block the
+        box ``s_range`` x ``t_range``."""
+        p, mesh = self.params, self.section.kind == "mesh"
+        out = []
+        for t in tables:
+            name = t.string("name")
+            if not WORD.fullmatch(name) or name in (r.name for r in out):
+                t.fail("name", f"{name!r}: a word of letters, digits and '_', one per region")
+            if mesh:
+                for key in ("s_range", "t_range"):
+                    if t.has(key):
+                        t.fail(key, "not for a mesh section: its region is the physical surface name")
+                if name not in self.section.regions:
+                    t.fail("name", f"{name!r} is not a physical surface of the mesh (it has "
+                                   f"{', '.join(self.section.regions)})")
+                box = (None, None)
+            else:
+                box = []
+                for key, axis in (("s_range", self.section.s), ("t_range", self.section.t)):
+                    a, b = t.numbers(key, 2)
+                    lo, hi = axis.span
+                    if not lo <= a < b <= hi:
+                        t.fail(key, f"[{a:g}, {b:g}] is outside the section or empty: need {lo:g} <= a < b <= {hi:g}")
+                    box.append((a, b))
+            E = t.number("E", p["E"], lo=0.0)
+            E_T = t.number("E_T", 0.0, lo=0.0)
+            if E <= 0 or E_T >= E:
+                t.fail("E" if E <= 0 else "E_T", "need E > 0 and 0 <= E_T < E")
+            nu = t.number("nu", p["nu"], lo=-0.9999, hi=0.49999)
+            material = Material(E, nu, t.number("rho", p["rho"], lo=1e-12), t.number("tau_s", p["tau_s"], lo=0.0),
+                                E_T=E_T, plastic=p["plastic"])
+            out.append(Region(name, material, *box))
+        if not mesh:
+            for i, a in enumerate(out):
+                for b in out[:i]:
+                    if all(max(x[0], y[0]) < min(x[1], y[1]) for x, y in ((a.s_range, b.s_range), (a.t_range, b.t_range))):
+                        self.fail("region", f"regions {b.name!r} and {a.name!r} overlap")
+        return tuple(out)
+
     def read_axis(self, section: _Table, key: str) -> Axis:
         t = section.table(key, ("breaks", "counts", "refinable"))
         breaks = t.numbers("breaks")
@@ -320,7 +389,8 @@ class _Scene:
         return Axis(breaks, tuple(counts), t.boolean("refinable", True))
 
     def edge(self, t: _Table, key: str, allow_all: bool = False) -> str:
-        names = tuple(self.section.edges) + EDGES + (("all",) if allow_all else ())
+        parametric = () if self.section.kind == "mesh" else EDGES  # a mesh's edges are its physical curves
+        names = tuple(self.section.edges) + parametric + (("all",) if allow_all else ())
         return t.string(key, choices=names)
 
     def intervals(self, t: _Table, key: str) -> tuple[tuple[float, float], ...]:
@@ -386,9 +456,7 @@ class _Scene:
 
         from .manufactured import numeric, time_function
 
-        (s0, s1), (t0, t1) = self.section.s.span, self.section.t.span
-        inside = (np.arange(7) + 0.5) / 7  # off the edges and the axis, as quadrature points are
-        x1, x2 = self.section.to_x(s0 + (s1 - s0) * inside[:, None, None], t0 + (t1 - t0) * inside[None, :, None])
+        x1, x2 = (np.reshape(v, (-1, 1)) for v in self.section.inside(7))
         x3 = self.length * (np.arange(16) + 0.5) / 16
         for text in pattern:
             try:
@@ -398,9 +466,9 @@ class _Scene:
                 t.fail("pattern", f"{_excerpt(text)} cannot be evaluated inside the body ({failure(exc)})")
             bad = ~np.isfinite(values)
             if bad.any():
-                i, j, k = np.argwhere(bad)[0]
-                t.fail("pattern", f"{_excerpt(text)} is not finite inside the body (at x1 = {x1[i, j, 0]:g}, "
-                                  f"x2 = {x2[i, j, 0]:g}, x3 = {x3[k]:g})")
+                i, k = np.argwhere(np.broadcast_to(bad, np.broadcast_shapes(x1.shape, x3.shape)))[0]
+                t.fail("pattern", f"{_excerpt(text)} is not finite inside the body (at x1 = {x1[i, 0]:g}, "
+                                  f"x2 = {x2[i, 0]:g}, x3 = {x3[k]:g})")
         factor = time_function(time)
         for when in np.linspace(0.0, self.params["t_end"], 201):
             try:
@@ -436,9 +504,9 @@ class _Scene:
     def read_cutout(self, t: _Table) -> Cutout | None:
         """A cut-out, or None where its section box is empty (so ``notch_depth = 0`` is no notch)."""
         box = []
-        for key, axis in (("s_range", self.section.s), ("t_range", self.section.t)):
+        spans = self.section.bounds if self.section.kind == "mesh" else (self.section.s.span, self.section.t.span)
+        for key, (lo, hi) in zip(("s_range", "t_range"), spans):
             a, b = t.numbers(key, 2)
-            lo, hi = axis.span
             if not lo <= a <= b <= hi:
                 t.fail(key, f"[{a:g}, {b:g}] is outside the section: need {lo:g} <= a <= b <= {hi:g}")
             box.append((a, b))
@@ -484,12 +552,8 @@ class _Scene:
 
     def check_point(self, t: _Table, point: tuple[float, float, float]) -> None:
         """The point lies in the section (to round-off) and along x3 in the body."""
-        s, tt = (float(v) for v in self.section.from_x(point[0], point[1]))
-        for value, axis in ((s, self.section.s), (tt, self.section.t)):
-            lo, hi = axis.span
-            slack = 1e-9 * max(abs(lo), abs(hi), hi - lo)
-            if not lo - slack <= value <= hi + slack:
-                t.fail("point", f"{list(point)!r} is outside the section")
+        if not self.section.contains(point[0], point[1]):
+            t.fail("point", f"{list(point)!r} is outside the section")
         lo, hi = (0.0, self.length) if self.body == PRISM else (-TWO_PI, TWO_PI)
         if not lo <= point[2] <= hi:
             t.fail("point", f"x3 = {point[2]:g} is outside the body: need {lo:g} <= x3 <= {hi:g}")

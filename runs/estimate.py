@@ -192,6 +192,8 @@ def order(case, part: str) -> float:
 def space_ratio(fine, coarse) -> float:
     """How much finer the mesh of ``fine`` is than that of ``coarse``: the geometric mean over
     the section's refinable axes of the element-count ratios."""
+    if fine.section.kind == "mesh":  # split k x k: k times the elements along each direction
+        return fine.mesh_scale / coarse.mesh_scale
     (fs, ft), (cs, ct) = fine.cutout_edges, coarse.cutout_edges
     ratios = [(len(fa.grid(fine.mesh_scale, fe)) - 1) / (len(ca.grid(coarse.mesh_scale, ce)) - 1)
               for fa, ca, fe, ce in ((fine.section.s, coarse.section.s, fs, cs), (fine.section.t, coarse.section.t, ft, ct))

@@ -31,8 +31,11 @@ MEANING = {"strain": "largest strain (plastic or total)", "rotation": "largest r
 
 def smallest_dimension(case) -> float:
     """The smallest extent of the cross-section along a refinable axis (a polar section: its
-    thickness; a one-element plane-strain slice does not count)."""
+    thickness; a one-element plane-strain slice does not count; a mesh section: its bounding
+    box's smaller side)."""
     sec = case.section
+    if sec.kind == "mesh":
+        return sec.smallest_dimension
     spans = []
     if sec.s.refinable or sec.kind == "polar":
         spans.append(abs(sec.s.span[1] - sec.s.span[0]))
