@@ -131,7 +131,9 @@ def plan(case, solver: str, on_coarse: bool = True) -> Plan:
     if on_coarse:
         coarse = halved(case)
         settings = ", ".join(f"{k} {v}" for k, v in coarse.items())
-        if not admissible(case, coarse):
+        if "coarsen" in coarse and case.section.kind == "mesh":  # a mesh cannot be coarsened: twice as fine
+            _upward(case, "space", {}, "run", out, upward, unmeasured)
+        elif not admissible(case, coarse):
             unmeasured["space"] = f"half the mesh ({settings}) is outside the parameters' range"
         elif space_ratio(case, rebuild(case, coarse)) < MIN_SPACE_RATIO:
             unmeasured["space"] = f"the mesh cannot be halved ({settings} leaves one element per segment)"
@@ -235,7 +237,10 @@ def asymptotic(d_fine: float, d_coarse: float, ratio: float) -> bool:
 def finer_companion(case, part: str, base: dict, against: str = "space") -> Companion:
     """The companion on the finer side of the run's setting (on the mesh ``base`` sets), for a
     part whose coarser companions are pre-asymptotic or out of range: half the step, or half as
-    many harmonics again (at least one more)."""
+    many harmonics again (at least one more), or a mesh twice as fine (a mesh section at an odd
+    ``refine``, which cannot be coarsened)."""
+    if part == "space":
+        return Companion("space_up", {**base, "refine": 2 * case.refine}, against)
     if part == "time":
         return Companion("time_up", {**base, "dt": case.dt / 2}, against)
     return Companion("harmonics_up", {**base, "harmonics": max((3 * case.harmonics) // 2, case.harmonics + 1)},

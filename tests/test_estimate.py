@@ -403,3 +403,12 @@ def test_a_partial_estimate_never_meets_the_tolerance():
     partial = Attempt(case, None, {"method": "companions", "partial": True}, 0.001, 1.0, 1.0)
     assert whole.meets(0.01) and not partial.meets(0.01)
     assert Attempt(case, None, {"partial": True}, 0.5, 1.0, 1.0, measured=0.001).meets(0.01)  # the truth measured it
+
+
+def test_a_mesh_section_that_cannot_be_coarsened_is_measured_upward_in_space():
+    from runs.estimate import plan
+
+    odd = plan(get_case("flywheel"), "smfem")
+    assert odd.upward == {"space": "space_up"} and odd.companions[0].overrides == {"refine": 2}
+    assert all(c.against in ("run", "time", "harmonics") for c in odd.companions)  # on the run's own mesh
+    assert plan(get_case("flywheel", {"refine": 2}), "smfem").companions[0].overrides == {"refine": 1}
