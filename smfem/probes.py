@@ -29,6 +29,7 @@ def locate(mesh: SectionMesh, element: Element, point) -> tuple[int, float, floa
         N, dxi, deta = element.shape_functions(xi[:, 0], xi[:, 1])
         x = np.einsum("ei,eia->ea", N, X)
         J = np.stack([np.einsum("ei,eia->ea", dxi, X), np.einsum("ei,eia->ea", deta, X)], axis=2)
+        J[np.linalg.det(J) == 0] = np.eye(2)  # a fold of a far element's extended map: step on
         xi = np.clip(xi + np.linalg.solve(J, (p - x)[..., None])[..., 0], -2.0, 2.0)
     outside = np.abs(xi).max(axis=1) - 0.5
     e = int(np.argmin(np.where(np.isfinite(outside), outside, np.inf)))
