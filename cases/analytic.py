@@ -12,6 +12,8 @@ Functions
 ---------
 lame_cylinder
     Thick-walled cylinder under internal and external pressure (plane strain or plane stress).
+compound_cylinder
+    Two bonded Lame layers of different materials under internal and external pressure.
 hinged_strip_sine
     Exact 2-D plane-strain elasticity solution of a simply supported (diaphragm) strip under a
     sinusoidal pressure on its top face (Airy stress function; "cylindrical bending").
@@ -27,7 +29,7 @@ import numpy as np
 
 from .material import lame
 
-__all__ = ["lame_cylinder", "hinged_strip_sine", "hill_cylinder"]
+__all__ = ["lame_cylinder", "compound_cylinder", "hinged_strip_sine", "hill_cylinder"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -95,6 +97,67 @@ def _lame_field(r, A, B, E, nu, plane="strain"):
     else:
         sigma_zz = np.zeros_like(sigma_rr)
     out = dict(u_r=u_r, sigma_rr=sigma_rr, sigma_tt=sigma_tt, sigma_zz=sigma_zz)
+    shape = np.broadcast_shapes(*(np.shape(val) for val in out.values()))
+    return {key: np.broadcast_to(val, shape).copy() for key, val in out.items()}
+
+
+def compound_cylinder(r, radii, E, nu, p_inner, p_outer, plane="strain"):
+    """Two bonded layers (a compound cylinder) under uniform internal and external pressure.
+
+    Parameters
+    ----------
+    r : array_like
+        Radius (length), normally ``a <= r <= c``: the inner layer's field for ``r <= b``, the
+        outer's beyond.
+    radii : (a, b, c)
+        Inner radius, interface and outer radius (length), ``0 < a < b < c``.
+    E, nu : (inner, outer)
+        Each layer's Young's modulus (stress units) and Poisson's ratio (``nu < 0.5``).
+    p_inner, p_outer : float or array_like
+        Pressure (stress units) on ``r = a`` and on ``r = c``, positive = compressive on the
+        surface, as in :func:`lame_cylinder`: ``sigma_rr(a) = -p_inner``, ``sigma_rr(c) = -p_outer``.
+    plane : {'strain', 'stress'}
+        As in :func:`lame_cylinder`.
+
+    Returns
+    -------
+    dict of ndarray
+        ``u_r`` (length, positive outward), ``sigma_rr``, ``sigma_tt``, ``sigma_zz`` (stress
+        units; at ``r = b`` the inner layer's hoop and axial stress: they jump there) and
+        ``p_interface``, the contact pressure at ``r = b`` (compression positive), all broadcast
+        to a common shape.
+
+    Notes
+    -----
+    Each layer is a Lame cylinder (:func:`lame_cylinder`): the inner one under ``p_inner`` and
+    the interface pressure ``p_b``, the outer one under ``p_b`` and ``p_outer``; ``sigma_rr`` is
+    continuous at ``b`` by construction, and ``p_b`` makes ``u_r`` continuous there. Each
+    layer's ``u_r(b)`` is linear in its two pressures, so with ``u_in = u_in0 + p_b u_in1`` and
+    ``u_out = u_out0 + p_b u_out1`` (``u_in1 < 0 < u_out1``),
+    ``p_b = (u_out0 - u_in0) / (u_in1 - u_out1)``.
+
+    Source: Timoshenko & Goodier, *Theory of Elasticity*, 3rd ed. (1970), ch. 4 (shrink-fit
+    and compound cylinders); Barber, *Elasticity*, 3rd ed. (2010), ch. 8.
+    """
+    a, b, c = radii
+    (E1, E2), (nu1, nu2) = E, nu
+    r = np.asarray(r, dtype=float)
+    p_inner, p_outer = np.asarray(p_inner, dtype=float), np.asarray(p_outer, dtype=float)
+
+    def inner(p_b, rr=b):
+        return lame_cylinder(rr, a, b, p_inner, p_b, E1, nu1, plane)
+
+    def outer(p_b, rr=b):
+        return lame_cylinder(rr, b, c, p_b, p_outer, E2, nu2, plane)
+
+    u_in0, u_out0 = inner(0.0)["u_r"], outer(0.0)["u_r"]
+    # per unit interface pressure alone (the layers' own loads off)
+    u_in1 = lame_cylinder(b, a, b, 0.0, 1.0, E1, nu1, plane)["u_r"]
+    u_out1 = lame_cylinder(b, b, c, 1.0, 0.0, E2, nu2, plane)["u_r"]
+    p_b = (u_out0 - u_in0) / (u_in1 - u_out1)
+    fields_in, fields_out = inner(p_b, r), outer(p_b, r)
+    out = {key: np.where(r <= b, fields_in[key], fields_out[key]) for key in fields_in}
+    out["p_interface"] = p_b
     shape = np.broadcast_shapes(*(np.shape(val) for val in out.values()))
     return {key: np.broadcast_to(val, shape).copy() for key, val in out.items()}
 
