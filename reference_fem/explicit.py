@@ -22,6 +22,10 @@ Scheme (velocity form; Belytschko, Liu & Moran, *Nonlinear Finite Elements*, box
 (elastic) or ``B^T w sigma`` with the radial return from the committed state at every step
 (the strain increment of one step is small: no iteration, the state is committed at once).
 
+In a body of several materials (``case.regions``) ``K``, ``M`` and the law are each element's
+own, so ``omega_max``, the largest eigenvalue of the pair, is set by the stiffest and fastest
+material where its elements are smallest (no wave-speed estimate from one material).
+
 A rigid wall is a kinematic constraint (the forward-increment Lagrange multiplier of
 Carpenter, Taylor & Katona 1991): a face node predicted through the wall is put back onto it
 along the wall's normal. With a diagonal mass that is the exact multiplier of the constraint,
@@ -42,6 +46,7 @@ import scipy.sparse.linalg as sla
 from cases.params import UnsupportedCase, newmark_only
 from cases.result import RunResult
 
+from . import forms
 from .face import plane_face
 from .mesh import build_mesh
 from .model import INTORDER, Model
@@ -100,7 +105,7 @@ class ExplicitSystem:
     @property
     def sigma(self) -> np.ndarray:
         if not self.plastic and self._sigma_of is not self._u:
-            self._sigma = np.einsum("qc,cd->qd", (self.B @ self._u).reshape(self.model.n_qp, -1), self.model.D)
+            self._sigma = forms.elastic_stress((self.B @ self._u).reshape(self.model.n_qp, -1), self.model.D)
             self._sigma_of = self._u
         return self._sigma
 
@@ -110,7 +115,7 @@ class ExplicitSystem:
         if self.plastic:
             return self._sigma[q]
         nc = self._sigma.shape[1]
-        return self.model.D @ (self.B[q * nc : (q + 1) * nc] @ self._u)
+        return forms.at_points(self.model.D, q) @ (self.B[q * nc : (q + 1) * nc] @ self._u)
 
     @property
     def peps(self) -> np.ndarray:

@@ -77,6 +77,23 @@ def elastic_matrix(lam: float, mu: float, dim: int) -> np.ndarray:
     return lam * np.outer(m, m) + 2.0 * mu * np.eye(nc)
 
 
+def at_points(D: np.ndarray, points) -> np.ndarray:
+    """The elastic matrix at ``points`` (an index or an index array): ``D`` itself for one
+    material ``(nc, nc)``, its rows of a per-point ``(n_qp, nc, nc)`` (several materials)."""
+    return D if D.ndim == 2 else D[points]
+
+
+def elastic_stress(strain: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """``D eps`` at every point, ``(n_qp, nc)``, of strains ``(n_qp, nc)``; ``D`` one matrix
+    ``(nc, nc)`` or one per point ``(n_qp, nc, nc)``.
+
+    By einsum, not a BLAS matrix product: threaded BLAS on this tall, thin product stalls on
+    a busy machine (15 ms against 2 ms measured, 3D rod)."""
+    if D.ndim == 2:
+        return np.einsum("qc,cd->qd", strain, D)
+    return np.einsum("qc,qcd->qd", strain, D)
+
+
 def material_blocks(D: np.ndarray, weights: np.ndarray) -> sp.bsr_matrix:
     """Block-diagonal matrix of ``weights[q] * D[q]``; ``D`` is ``(n_qp, nc, nc)`` or ``(nc, nc)``."""
     nq = weights.shape[0]

@@ -5,10 +5,12 @@ For a ring or a prism whose material does not vary along x3, the harmonics of th
 ``u3 ~ cos(k x3)``, ``k = l pi / length``) decouple exactly, and each one is a 2D problem on
 the cross-section with three amplitude components ``(U, W, V)``. This module builds those
 problems with scikit-fem: quadratic quadrilaterals (``ElementQuad2``), full Gauss
-integration (order 4), consistent mass, on the section block of :mod:`cases.geometry`. It is
-the reference's own discretization, with nothing in common with the SMFEM element but the
-basis functions along x3 that the case's symmetry dictates (the separation of variables is
-exact for such bodies); :mod:`reference_fem.modal` integrates it exactly in time.
+integration (order 4), consistent mass, on the section block of :mod:`cases.geometry` (a
+section of several materials, ``case.regions``, sums each material's integrals over its own
+elements: :mod:`reference_fem.regions`). It is the reference's own discretization, with nothing
+in common with the SMFEM element but the basis functions along x3 that the case's symmetry
+dictates (the separation of variables is exact for such bodies); :mod:`reference_fem.modal`
+integrates it exactly in time.
 
 A section axis marked not refinable (one element across a plane-strain width or axial length)
 is one the solution does not vary along: the nodes on each line across it share their
@@ -28,6 +30,7 @@ from skfem import CellBasis, ElementQuad2, FacetBasis, LinearForm, asm
 from cases.geometry import PRISM, RING, interval_fourier
 from cases.params import UnsupportedCase
 
+from . import regions
 from .mesh import Block, assemble_blocks, axis_nodes
 from .model import INTORDER
 
@@ -108,8 +111,12 @@ class HarmonicModel:
         self.probes = case.probe_names
         self.fields = [p.field for p in case.probes]
         sec = case.section
-        self.mesh = assemble_blocks([Block((axis_nodes(sec.s, case.mesh_scale), axis_nodes(sec.t, case.mesh_scale)),
-                                           lambda p: np.array(sec.to_x(p[0], p[1])))], lambda x: np.ones(x.shape[1], bool))
+        # the regions' box limits are node lines, as in the reference's own meshes
+        boxes = [r for r in case.regions if r.s_range is not None]
+        s_nodes = axis_nodes(sec.s, case.mesh_scale, [v for r in boxes for v in r.s_range])
+        t_nodes = axis_nodes(sec.t, case.mesh_scale, [v for r in boxes for v in r.t_range])
+        self.mesh = assemble_blocks([Block((s_nodes, t_nodes), lambda p: np.array(sec.to_x(p[0], p[1])))],
+                                    lambda x: np.ones(x.shape[1], bool))
         self.basis = CellBasis(self.mesh, ElementQuad2(), intorder=INTORDER)
         self.tie = self._tie()
         self._operators()
@@ -142,7 +149,8 @@ class HarmonicModel:
 
     def _operators(self) -> None:
         """Sparse value and gradient operators at the quadrature points, ``(n_qp, n_nodes)``,
-        and the weights ``w`` (times r for a ring)."""
+        the weights ``w`` (times r for a ring), each element's material (``material_index``,
+        into ``case.materials``) and ``parts``: each material with its points' weights."""
         b = self.basis
         nel, nqe = b.dx.shape
         rows = np.broadcast_to(np.arange(nel * nqe).reshape(nel, nqe), (nel, nqe))
@@ -163,8 +171,11 @@ class HarmonicModel:
         x1 = np.asarray(b.global_coordinates())[0].ravel()
         self.x1 = x1
         self.w = b.dx.ravel() * (x1 if self.case.body == RING else 1.0)
-        lam, mu = self.case.material.lame
-        self.lam, self.mu = lam, mu
+        centres = _section_params(self.case.section, regions.element_centres(self.mesh))
+        self.material_index = regions.element_index(self.case, *centres)
+        points = np.repeat(self.material_index, nqe)
+        # each material with the weights of its own points (the others' zero): one material's are w
+        self.parts = [(m, sp.diags(self.w * (points == k))) for k, m in enumerate(self.case.materials)]
 
     def _strains(self, l: int):
         """Strain amplitude operators ``(n_qp, 3 n)`` of harmonic ``l`` in dof order (U, W, V):
@@ -190,14 +201,16 @@ class HarmonicModel:
         case = self.case
         c1, c2 = _factors(case.body, l, case.length)
         normal, first, second = self._strains(l)
-        W = sp.diags(self.w)
-        lam, mu = self.lam, self.mu
         trace = normal[0] + normal[1] + normal[2]
-        K = c1 * (lam * trace.T @ W @ trace + 2 * mu * sum(e.T @ W @ e for e in normal)
-                  + mu * sum(g.T @ W @ g for g in first))
-        if c2:
-            K = K + c2 * mu * sum(g.T @ W @ g for g in second)
-        m = self.phi.T @ W @ self.phi * case.material.rho
+        K, m = 0, 0
+        for material, W in self.parts:  # a sum over the materials, each on its own points
+            lam, mu = material.lame
+            K_part = c1 * (lam * trace.T @ W @ trace + 2 * mu * sum(e.T @ W @ e for e in normal)
+                           + mu * sum(g.T @ W @ g for g in first))
+            if c2:
+                K_part = K_part + c2 * mu * sum(g.T @ W @ g for g in second)
+            K = K + K_part
+            m = m + self.phi.T @ W @ self.phi * material.rho
         M = sp.block_diag([c1 * m, c1 * m, c2 * m])
         free = self._free(l)
         if free.size == 0:

@@ -5,12 +5,14 @@ reference's vectors: Mandel, points first ``(n_qp, nc)``; :meth:`stress` takes t
 (the reference's formulation) and the committed state, a :class:`reference_fem.plasticity.Return`,
 and ``tangent=False`` from the explicit engine (no consistent tangent needed).
 A law is made by ``LAWS[material.law](material, dim)``; an unknown law is refused when the
-model is built (:func:`get`). Add one with :func:`register`. The numerics are the reference's
-own, independent of SMFEM's (:mod:`smfem.laws`).
+model is built (:func:`get`). Add one with :func:`register`. A body of several materials
+(``case.regions``) has one law per material, each at its own points (:class:`Regional`). The
+numerics are the reference's own, independent of SMFEM's (:mod:`smfem.laws`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Callable
 
 import numpy as np
@@ -86,3 +88,84 @@ def get(material, dim: int):
     if make is None:
         raise UnsupportedCase(f"reference FEM: no material law {material.law!r} (its laws: {', '.join(LAWS)})")
     return make(material, dim)
+
+
+class Regional:
+    """Several materials' laws in one body, each at its own points: the shape of one law.
+
+    ``laws[k]`` is material k's law (:func:`get`) and ``index`` ``(n,)`` each point's material.
+    The elastic matrix is per point, ``(n, nc, nc)``; the state is the points' states merged
+    (each law's own record, a dataclass of arrays with the points first, or None). Every
+    material of a case follows the same law (:class:`cases.case.Case` checks it), so the parts'
+    states are of one type.
+    """
+
+    def __init__(self, laws: list, index: np.ndarray):
+        self.n = index.size
+        parts = [(law, np.flatnonzero(index == k)) for k, law in enumerate(laws)]
+        #: ``(law, its points)`` of every material with points
+        self.parts = [(law, points) for law, points in parts if points.size]
+        self.name = self.parts[0][0].name
+        self.nonlinear = any(law.nonlinear for law, _ in self.parts)
+        nc = laws[0].elastic_matrix().shape[-1]
+        self.D = np.empty((self.n, nc, nc))
+        for law, points in self.parts:
+            self.D[points] = law.elastic_matrix()
+
+    def elastic_matrix(self) -> np.ndarray:
+        return self.D
+
+    def _merged(self, states: list):
+        """One state of all points from the parts' states (in the order of :attr:`parts`)."""
+        fields = {}
+        for f in dataclasses.fields(states[0]):
+            values = [getattr(s, f.name) for s in states]
+            if values[0] is None:
+                fields[f.name] = None
+                continue
+            out = np.empty((self.n,) + values[0].shape[1:], values[0].dtype)
+            for (_, points), v in zip(self.parts, values):
+                out[points] = v
+            fields[f.name] = out
+        return type(states[0])(**fields)
+
+    @staticmethod
+    def _taken(state, points: np.ndarray):
+        """``state`` at ``points`` only."""
+        values = {f.name: getattr(state, f.name) for f in dataclasses.fields(state)}
+        return dataclasses.replace(state, **{k: v[points] for k, v in values.items() if v is not None})
+
+    def initial_state(self, n: int):
+        if n != self.n:
+            raise ValueError(f"regional law of {self.n} points asked for the state of {n}")
+        return self._merged([law.initial_state(points.size) for law, points in self.parts])
+
+    def trial(self, strain_increment: np.ndarray, state) -> np.ndarray:
+        out = np.empty_like(strain_increment)
+        for law, points in self.parts:
+            out[points] = law.trial(strain_increment[points], self._taken(state, points))
+        return out
+
+    def stress(self, strain: np.ndarray, state, tangent: bool = True):
+        states = [law.stress(strain[points], self._taken(state, points), tangent=tangent)[1]
+                  for law, points in self.parts]
+        merged = self._merged(states)
+        return merged.sigma, merged
+
+    def tangent(self, state) -> np.ndarray:
+        out = np.empty_like(self.D)
+        for law, points in self.parts:
+            out[points] = law.tangent(self._taken(state, points))
+        return out
+
+    def equivalent_plastic_strain(self, state) -> np.ndarray:
+        out = np.empty(self.n)
+        for law, points in self.parts:
+            out[points] = law.equivalent_plastic_strain(self._taken(state, points))
+        return out
+
+
+def regional(materials, dim: int, index: np.ndarray) -> Regional:
+    """The law of a body of several ``materials`` (``case.materials``), point ``q`` of material
+    ``index[q]``; each material's law as :func:`get` makes it (an unknown one is refused)."""
+    return Regional([get(m, dim) for m in materials], index)

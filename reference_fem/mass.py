@@ -24,33 +24,47 @@ from . import forms
 N_GAUSS = 3
 
 
-def consistent_mass(basis, rho: float, axisymmetric: bool, factor: np.ndarray | None = None) -> sp.csr_matrix:
-    """``int rho u . v`` (times r when axisymmetric) over the elements of ``basis``; ``factor``
-    (n_elements, n_qp): the density's variation at the quadrature points."""
+def density(basis, rho: float | np.ndarray) -> float | np.ndarray:
+    """The density as a form takes it: a number as it is; one per element of the mesh
+    ``(n_mesh_elements,)`` (a body of several materials) at the quadrature points of the elements
+    of ``basis``, ``(n_elements, n_qp)``."""
+    if np.ndim(rho) == 0:
+        return rho
+    elements = slice(None) if basis.tind is None else basis.tind
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(rho)[elements][:, None], basis.dx.shape))
+
+
+def consistent_mass(basis, rho: float | np.ndarray, axisymmetric: bool, factor: np.ndarray | None = None
+                    ) -> sp.csr_matrix:
+    """``int rho u . v`` (times r when axisymmetric) over the elements of ``basis``; ``rho`` a
+    number or one per element of the mesh (:func:`density`); ``factor`` (n_elements, n_qp): the
+    density's variation at the quadrature points."""
     r = np.asarray(basis.global_coordinates())[0] if axisymmetric else np.ones(basis.dx.shape)
-    return asm(forms.mass, basis, rho=rho, weight=r * (1.0 if factor is None else factor)).tocsr()
+    weight = r * (1.0 if factor is None else factor)
+    return asm(forms.mass, basis, rho=density(basis, rho), weight=weight).tocsr()
 
 
-def lumped_mass(basis, rho: float, axisymmetric: bool, factor: np.ndarray | None = None) -> np.ndarray:
+def lumped_mass(basis, rho: float | np.ndarray, axisymmetric: bool,
+                factor: np.ndarray | None = None) -> np.ndarray:
     """Diagonal mass by HRZ lumping (Hinton, Rock & Zienkiewicz 1976), shape ``(n_dof,)``.
 
     Each element's consistent diagonal ``int rho phi_i^2`` is scaled so that it sums to the
     element's mass: every entry is positive for any Lagrange element (nodal quadrature of the
     9-node quadrilateral gives zero to the axis nodes of an axisymmetric section, whose axial
-    motion then has no inertia) and the total mass is kept. Same units as
+    motion then has no inertia) and the total mass is kept. Same units and ``rho`` as
     :func:`consistent_mass`.
     """
     scalar = CellBasis(basis.mesh, basis.elem.elem, quadrature=basis.quadrature)
     r = np.asarray(scalar.global_coordinates())[0] if axisymmetric else np.ones(scalar.dx.shape)
-    w = rho * scalar.dx * r * (1.0 if factor is None else factor)  # (n_elements, n_qp)
+    w = density(scalar, rho) * scalar.dx * r * (1.0 if factor is None else factor)  # (n_elements, n_qp)
     diag = np.array([np.einsum("eq,eq->e", np.asarray(phi[0]) ** 2, w) for phi in scalar.basis])  # (n_local, nel)
     share = diag * (w.sum(axis=1) / diag.sum(axis=0))
     nodes = np.bincount(scalar.element_dofs.ravel(), share.ravel(), minlength=scalar.N)
     return np.repeat(nodes, basis.mesh.dim())
 
 
-def redistributed_mass(M: sp.csr_matrix, basis, facets: np.ndarray, rho: float, axisymmetric: bool,
-                       intorder: int) -> sp.csr_matrix:
+def redistributed_mass(M: sp.csr_matrix, basis, facets: np.ndarray, rho: float | np.ndarray,
+                       axisymmetric: bool, intorder: int) -> sp.csr_matrix:
     """``M`` with the elements on boundary ``facets`` integrated by the layer rule (module doc).
 
     Parameters
@@ -58,6 +72,7 @@ def redistributed_mass(M: sp.csr_matrix, basis, facets: np.ndarray, rho: float, 
     M : consistent mass of ``basis`` (full dofs)
     basis : skfem.CellBasis of the vector quadratic element
     facets : boundary facets of the contact face
+    rho : density, a number or one per element of the mesh (:func:`density`)
     intorder : the Gauss order ``M`` was integrated with
 
     Returns

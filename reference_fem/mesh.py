@@ -18,8 +18,8 @@ Resolution (``refine`` = ``case.params['refine']`` multiplies every refinable co
 - a solid of revolution with an axis (3D dome, rod): an O-grid disk (a square centre block and
   four outer blocks) replaces the polar grid, so there is no degenerate element on the axis;
   its radial density follows the section's axis-direction count.
-Break points are inserted where cut-outs, load patches and displacement probes begin or end,
-so these are element boundaries or nodes.
+Break points are inserted where cut-outs, material regions, load patches and displacement
+probes begin or end, so these are element boundaries or nodes.
 
 Grading (``grading`` = beta > 1, for truths): a cut-out's limit inside the body is a
 re-entrant corner line (the cut-outs' corners, the notch root). Every segment between break
@@ -260,8 +260,13 @@ def corner_lines(case) -> tuple[tuple, tuple, tuple]:
 
 
 def _breaks(case, rep: str):
-    """Break points along s, t and x3: cut-out and load limits, displacement-probe positions."""
+    """Break points along s, t and x3: cut-out, region and load limits, displacement-probe
+    positions."""
     s_extra, t_extra, x3_extra = [], [], []
+    for r in case.regions:
+        if r.s_range is not None:
+            s_extra += list(r.s_range)
+            t_extra += list(r.t_range)
     for c in case.cutouts:
         s_extra += list(c.s_range)
         t_extra += list(c.t_range)

@@ -9,7 +9,7 @@ from skfem import CellBasis, ElementHex2, ElementQuad2, ElementVector, FacetBasi
 from cases.params import UnsupportedCase
 from cases.geometry import PRISM, RING
 
-from . import forms, laws
+from . import forms, laws, regions
 from .frames import AXISYMMETRIC, SOLID, body_coordinates, body_rotation, in_intervals, section_of, x3_of
 from .mass import consistent_mass, lumped_mass, redistributed_mass
 from .mesh import RefMesh, build_mesh
@@ -38,8 +38,13 @@ class Model:
     fix_rigid_body : for static solves of rings that are not axisymmetric (no support against
         in-plane rigid-body motion): also fix u_y at the two inner-surface nodes on the x axis
         and u_x at the one on the +y axis, exact for loads symmetric about both axes
-    lam, mu : Lame constants (Pa)
-    D : (nc, nc) elastic Mandel matrix (Pa)
+    lam, mu : Lame constants of ``case.material`` (Pa)
+    material_index : ndarray of int, ``(n_elements,)``, each element's index into
+        ``case.materials`` (:mod:`reference_fem.regions`; 0 everywhere without regions)
+    law : the material law (:mod:`reference_fem.laws`; with regions a
+        :class:`~reference_fem.laws.Regional` one)
+    D : elastic Mandel matrix (Pa), ``(nc, nc)``; with regions one per quadrature point,
+        ``(n_qp, nc, nc)`` (:func:`reference_fem.forms.elastic_stress` takes either)
 
     Supports: a support on edge ``'all'`` fixes that component at every node, so in 3D the
     plane-strain direction (u_z of the cylinders, u_width of the strip) is zero on both faces
@@ -63,8 +68,16 @@ class Model:
         if bbar:
             self.B = forms.bbar_operator(self.B, self.weights, self.x_qp, self.basis.dx.shape[1])
         self.lam, self.mu = case.material.lame
-        #: the reference's implementation of the material's law (an unknown one is refused here)
-        self.law = laws.get(case.material, self.dim)
+        #: each element's index into ``case.materials`` (0 everywhere without regions)
+        self.material_index = regions.mesh_material_index(case, self.rep, mesh)
+        # the reference's implementation of the material's law (an unknown one is refused here) and
+        # the density: with regions each material's at its own elements (their quadrature points)
+        if case.regions:
+            points = np.repeat(self.material_index, self.basis.dx.shape[1])
+            self.law = laws.regional(case.materials, self.dim, points)
+            rho = regions.per_element(case.materials, self.material_index, "rho")
+        else:
+            self.law, rho = laws.get(case.material, self.dim), case.material.rho
         self.D = self.law.elastic_matrix()
         if (case.variation or case.forces) and (case.material.plastic or case.wall is not None):
             raise UnsupportedCase("reference solver: body forces and a varying material are elastic and without "
@@ -73,12 +86,12 @@ class Model:
         self.factor = case.variation_factor(x3_of(case, self.rep, self.x_qp)) if case.variation else None
         factor = None if self.factor is None else self.factor.reshape(self.basis.dx.shape)
         if lumped:
-            self.M = sp.diags(lumped_mass(self.basis, case.material.rho, axisym, factor)).tocsr()
+            self.M = sp.diags(lumped_mass(self.basis, rho, axisym, factor)).tocsr()
         else:
-            self.M = consistent_mass(self.basis, case.material.rho, axisym, factor)
+            self.M = consistent_mass(self.basis, rho, axisym, factor)
         if case.wall is not None and not lumped:
-            self.M = redistributed_mass(self.M, self.basis, self.edge_facets(case.wall.edge),
-                                        case.material.rho, axisym, INTORDER)
+            self.M = redistributed_mass(self.M, self.basis, self.edge_facets(case.wall.edge), rho, axisym,
+                                        INTORDER)
         self.Q = self._load_vector()
         #: ``(time function, load vector)`` per body-force term of the case
         self.force_terms = [self._force_vector(term) for term in case.forces]

@@ -57,7 +57,8 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
         active-set iterations); ``cpu_time_s``: assembly, factorization and time stepping, mesh
         generation excluded; ``mesh``: the final state (cartesian points; point data
         'displacement', 'velocity'; cell data 'stress', the element mean as a cartesian tensor,
-        and 'peps', the element mean, when plastic); ``info``: 'dim',
+        'peps', the element mean, when plastic, and 'region', the element's index into
+        ``case.materials``); ``info``: 'dim',
         'representation', 'element', 'n_elements', 'intorder', 'counts' (elements per mesh
         direction), 'factorizations' (of K + a0 M and of tangents), 'cpu_mesh_s'; with a wall
         also 'contact_nodes', 'energy_before' and 'energy_after' (kinetic + strain, J, at t = 0
@@ -142,7 +143,9 @@ def static(case, factors=(1.0,)) -> tuple[Model, list[np.ndarray], list[int], ob
 
 def output_mesh(model: Model, u_full: np.ndarray, system, v_full: np.ndarray) -> meshio.Mesh:
     """meshio mesh of the quadratic elements with the displacement and velocity (cartesian, 3
-    components) and the element mean of the stress (a cartesian tensor)."""
+    components), the element mean of the stress (a cartesian tensor) and of the equivalent
+    plastic strain (plastic runs), and each element's material, ``region`` (its index into
+    ``case.materials``: 0 outside every region)."""
     mesh, case, rep = model.rmesh.mesh, model.case, model.rep
     to_frame = mesh_frame_to_cartesian(case, rep)
     vectors = {}
@@ -157,6 +160,7 @@ def output_mesh(model: Model, u_full: np.ndarray, system, v_full: np.ndarray) ->
     if case.material.plastic:
         cell_data["peps"] = [system.peps.reshape(mesh.nelements, -1).mean(axis=1)]
     cell_data["solid"] = [np.ones(mesh.nelements, np.uint8)]  # as SMFEM's field: the cut-outs are not meshed here
+    cell_data["region"] = [model.material_index.astype(np.int32)]  # index into case.materials
     return meshio.Mesh(to_cartesian(case, rep, mesh.p).T, {cell_type: cells}, point_data=vectors, cell_data=cell_data)
 
 

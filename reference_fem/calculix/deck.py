@@ -3,7 +3,8 @@
 The mesh's quadratic Lagrange elements lose their face and centre nodes and become serendipity
 elements: CPE8 (plane strain), CAX8 (axisymmetric; x = r, y = z) or C3D20. Everything else is
 the case's: the elastic material, von Mises plasticity as a table (ideal, or linear isotropic
-hardening), the pressures as element-face loads under a step amplitude (on at t = 0), the
+hardening), a material and a solid section per region of another material (on the element set
+of its elements), the pressures as element-face loads under a step amplitude (on at t = 0), the
 reference's supports (so the same dofs are fixed), the initial velocity, implicit dynamics (fixed
 increments of dt where linear; see :func:`fixed_increments`) and Newmark's average acceleration (``ALPHA = 0``: beta = 1/4, gamma = 1/2, the
 case's convention) and output at every increment. A rigid wall is a unilateral gap element
@@ -90,7 +91,8 @@ def build_deck(case, every: int = 1) -> Deck:
         raise UnsupportedCase("calculix: a tilted wall (wall_slope > 0) is not exported; use wall_slope=0")
     if case.wall is not None and case.material.plastic:
         raise UnsupportedCase("calculix: contact with plasticity is not exported (as in the reference FEM)")
-    _law_cards(case.material)
+    for mat in case.materials:
+        _law_cards(mat)
     model = Model(case)
     mesh, rep, dim = model.rmesh.mesh, model.rep, model.dim
     _, cells = vtk_cells(mesh)
@@ -113,9 +115,7 @@ def build_deck(case, every: int = 1) -> Deck:
     ]
     if case.wall is not None:
         out += _wall(model, points, cells, element)
-    out += _material(case)
-    thickness = "" if dim == 3 else "\n1."  # plane strain: per unit thickness; axisymmetric: ignored
-    out += [f"*SOLID SECTION, ELSET=EALL, MATERIAL=MAT{thickness}"]
+    out += _sections(case, model)
     out += _supports(model, used)
     out += _initial_velocity(case, model, used)
     probe_nodes = _probe_nodes(case, model, points, used)
@@ -194,9 +194,39 @@ def _law_cards(mat):
     return cards
 
 
-def _material(case) -> list[str]:
-    mat = case.material
-    return ["*MATERIAL, NAME=MAT", "*DENSITY", f"{mat.rho:.13g}", *_law_cards(mat)(mat)]
+def _material(mat, name: str) -> list[str]:
+    return [f"*MATERIAL, NAME={name}", "*DENSITY", f"{mat.rho:.13g}", *_law_cards(mat)(mat)]
+
+
+def _region_names(case) -> list[str]:
+    """The deck's name of each region's material and element set: its name in capitals, its
+    characters other than letters, digits and ``_`` made ``_``, prefixed ``MAT_`` and ``E_``
+    (``case.material`` is ``MAT`` on ``EALL``, or on ``EBASE`` beside regions)."""
+    names = ["".join(ch if ch.isalnum() or ch == "_" else "_" for ch in r.name.upper()) for r in case.regions]
+    if len(set(names)) < len(names) or any(len(n) > 70 for n in names):
+        given = ", ".join(r.name for r in case.regions)
+        raise UnsupportedCase(f"calculix: region names {given} are not distinct (in capitals, other characters "
+                              "as _) or longer than 70 characters")
+    return names
+
+
+def _sections(case, model: Model) -> list[str]:
+    """The materials and their solid sections: ``MAT`` on every element (``EALL``), or with
+    regions one ``*MATERIAL`` and one ``*SOLID SECTION`` on an ``*ELSET`` per material (an
+    element set without elements is left out)."""
+    thickness = "" if model.dim == 3 else "\n1."  # plane strain: per unit thickness; axisymmetric: ignored
+    if not case.regions:
+        return _material(case.material, "MAT") + [f"*SOLID SECTION, ELSET=EALL, MATERIAL=MAT{thickness}"]
+    names = _region_names(case)
+    out = []
+    for k, (mat, material, elset) in enumerate(zip(case.materials, ["MAT"] + [f"MAT_{n}" for n in names],
+                                                   ["EBASE"] + [f"E_{n}" for n in names])):
+        out += _material(mat, material)
+        elements = np.flatnonzero(model.material_index == k) + 1
+        if elements.size:
+            out += [f"*ELSET, ELSET={elset}", *_rows(elements),
+                    f"*SOLID SECTION, ELSET={elset}, MATERIAL={material}{thickness}"]
+    return out
 
 
 def _supports(model: Model, used: np.ndarray) -> list[str]:

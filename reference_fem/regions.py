@@ -1,0 +1,61 @@
+"""Several materials in one body: the material of each element of a reference mesh.
+
+A case's regions (:class:`cases.geometry.Region`) are the parts of its section made of their own
+material; ``case.materials`` lists them, index 0 the case's ``material`` (outside every region).
+Every per-element array of the reference (Lame constants and the law at the quadrature points,
+density, the CalculiX element sets, the ``region`` cell array) is made from one index per
+element, ``materials[index]``; only :func:`element_index`, the lookup of that index, depends on
+how a region is given (here a parametric box of the mapped block).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cases.params import UnsupportedCase
+
+from .frames import section_of
+
+
+def element_centres(mesh) -> np.ndarray:
+    """Centre nodes of a quadratic mesh's elements, ``(dim, n_elements)`` (the image of the
+    reference element's centre, as :func:`reference_fem.mesh.assemble_blocks` keeps them)."""
+    return mesh.doflocs[:, mesh.dofs.element_dofs[-1]]
+
+
+def element_index(case, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Index into ``case.materials`` of elements whose centres have section parameters
+    ``(s, t)``, each ``(n_elements,)``; 0 outside every region.
+
+    A direction the mesh leaves out (NaN throughout: a plane-strain ring's axial t, a prism's
+    width s) counts as inside every region's range along it, which each region must then span
+    (as a cut-out must).
+    """
+    named = [r.name for r in case.regions if r.s_range is None]
+    if named:
+        raise UnsupportedCase(f"reference solver: regions {', '.join(named)} are a mesh section's physical "
+                              "surfaces; the reference meshes the mapped block only")
+    st = []
+    for values, axis, which in ((s, case.section.s, "s_range"), (t, case.section.t, "t_range")):
+        values = np.asarray(values, float)
+        if values.size and np.all(np.isnan(values)):
+            if not all(np.allclose(getattr(r, which), axis.span) for r in case.regions):
+                raise UnsupportedCase(f"reference solver: a region that does not span the plane-strain "
+                                      f"direction of {case.name!r} needs dim=3")
+            values = np.full(values.shape, 0.5 * (axis.span[0] + axis.span[1]))
+        st.append(values)
+    return case.material_index(st=np.column_stack(st))
+
+
+def mesh_material_index(case, rep: str, mesh) -> np.ndarray:
+    """Index into ``case.materials`` of every element of a reference ``mesh`` in
+    representation ``rep``, ``(n_elements,)`` (zeros without regions)."""
+    if not case.regions:
+        return np.zeros(mesh.nelements, int)
+    return element_index(case, *section_of(case, rep, element_centres(mesh)))
+
+
+def per_element(materials, index: np.ndarray, name: str) -> np.ndarray:
+    """The constant ``name`` (an attribute of each material: ``'rho'``, ``'E'``, ...) of every
+    element, ``(n_elements,)``."""
+    return np.array([getattr(m, name) for m in materials], float)[index]
