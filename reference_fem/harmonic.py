@@ -31,8 +31,10 @@ from cases.geometry import PRISM, RING, interval_fourier
 from cases.params import UnsupportedCase
 
 from . import regions
+from .frames import AXISYMMETRIC
 from .mesh import Block, assemble_blocks, axis_nodes
 from .model import INTORDER
+from .swept import edge_facets, swept_mesh
 
 #: components of a harmonic's amplitude vector, in dof order: U (x1), W (x2), V (x3)
 N_COMP = 3
@@ -111,12 +113,18 @@ class HarmonicModel:
         self.probes = case.probe_names
         self.fields = [p.field for p in case.probes]
         sec = case.section
-        # the regions' box limits are node lines, as in the reference's own meshes
-        boxes = [r for r in case.regions if r.s_range is not None]
-        s_nodes = axis_nodes(sec.s, case.mesh_scale, [v for r in boxes for v in r.s_range])
-        t_nodes = axis_nodes(sec.t, case.mesh_scale, [v for r in boxes for v in r.t_range])
-        self.mesh = assemble_blocks([Block((s_nodes, t_nodes), lambda p: np.array(sec.to_x(p[0], p[1])))],
-                                    lambda x: np.ones(x.shape[1], bool))
+        #: a mesh section's own quadratic mesh (its named edges), else None
+        self.section = None
+        if sec.kind == "mesh":  # its 9-node elements as they are, split refine x refine
+            swept = swept_mesh(case, AXISYMMETRIC, lambda x: np.ones(x.shape[1], bool))
+            self.mesh, self.section = swept.mesh, swept.section
+        else:
+            # the regions' box limits are node lines, as in the reference's own meshes
+            boxes = [r for r in case.regions if r.s_range is not None]
+            s_nodes = axis_nodes(sec.s, case.mesh_scale, [v for r in boxes for v in r.s_range])
+            t_nodes = axis_nodes(sec.t, case.mesh_scale, [v for r in boxes for v in r.t_range])
+            self.mesh = assemble_blocks([Block((s_nodes, t_nodes), lambda p: np.array(sec.to_x(p[0], p[1])))],
+                                        lambda x: np.ones(x.shape[1], bool))
         self.basis = CellBasis(self.mesh, ElementQuad2(), intorder=INTORDER)
         self.tie = self._tie()
         self._operators()
@@ -137,9 +145,9 @@ class HarmonicModel:
         non-refinable axis share their value (identity when every axis is refinable)."""
         sec, dofs = self.case.section, self.basis.doflocs
         N = self.basis.N
-        s, t = _section_params(sec, dofs)
-        if sec.s.refinable and sec.t.refinable:
+        if sec.kind == "mesh" or (sec.s.refinable and sec.t.refinable):
             return sp.identity(N, format="csr")
+        s, t = _section_params(sec, dofs)
         along = t if not sec.s.refinable else s  # the coordinate that varies
         if not sec.s.refinable and not sec.t.refinable:
             raise UnsupportedCase("harmonic model: a section with no refinable axis")
@@ -244,6 +252,8 @@ class HarmonicModel:
 
     def _edge_facets(self, edge: str) -> np.ndarray:
         sec, mesh = self.case.section, self.mesh
+        if sec.kind == "mesh":
+            return edge_facets(self.case, AXISYMMETRIC, mesh, self.section, mesh.boundary_facets(), edge)
         name = sec.edge(edge)
         axis = sec.s if name[0] == "s" else sec.t
         target = axis.span[0] if name.endswith("min") else axis.span[1]
@@ -263,6 +273,10 @@ class HarmonicModel:
         for support in case.supports:
             if support.edge == "all":
                 nodes = np.arange(n)
+            elif sec.kind == "mesh":
+                on = np.zeros(self.basis.N, bool)
+                on[self.basis.get_dofs(facets=self._edge_facets(support.edge)).flatten()] = True
+                nodes = reduced_nodes(on)
             else:
                 name = sec.edge(support.edge)
                 axis = sec.s if name[0] == "s" else sec.t

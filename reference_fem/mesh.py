@@ -136,6 +136,8 @@ class RefMesh:
     mesh: MeshQuad2 | MeshHex2
     rep: str
     counts: dict
+    #: a mesh section's own quadratic mesh at the case's refinement (its named edges), else None
+    section: object = None
 
 
 def build_mesh(case, grading: float = 1.0) -> RefMesh:
@@ -144,6 +146,10 @@ def build_mesh(case, grading: float = 1.0) -> RefMesh:
     if not grading >= 1.0:
         raise ValueError(f"grading must be at least 1, not {grading!r}")
     rep = representation(case)
+    if case.section.kind == "mesh":
+        from .swept import swept_mesh
+
+        return swept_mesh(case, rep, lambda x: ~_in_cutouts(case, rep, x))
     dim = 3 if rep == SOLID else 2
     scale = SECTION_SCALE[dim] * case.mesh_scale
     sec = case.section
@@ -363,7 +369,8 @@ def _in_cutouts(case, rep: str, x: np.ndarray) -> np.ndarray:
     mask = np.zeros(x.shape[1], bool)
     for c in case.cutouts:
         inside = np.ones(x.shape[1], bool)
-        for v, (a, b), axis in ((s, c.s_range, case.section.s), (t, c.t_range, case.section.t)):
+        axes = (case.section.s, case.section.t) if case.section.kind != "mesh" else (None, None)
+        for v, (a, b), axis in ((s, c.s_range, axes[0]), (t, c.t_range, axes[1])):
             if np.all(np.isnan(v)):
                 # a dropped (plane-strain) direction: the cut-out must run through all of it
                 if not np.allclose((a, b), axis.span):
@@ -391,8 +398,7 @@ def assemble_blocks(blocks, keep: Callable[[np.ndarray], np.ndarray]) -> MeshQua
     Nodes shared by blocks (or across a periodic seam) are merged by position.
     """
     pdim = len(blocks[0].axes)
-    elem, lin_cls, quad_cls = (ElementQuad2, MeshQuad1, MeshQuad2Curved) if pdim == 2 else (ElementHex2, MeshHex1, MeshHex2Curved)
-    ref = elem.doflocs  # (n_local_nodes, pdim); vertices first, centre last
+    ref = (ElementQuad2 if pdim == 2 else ElementHex2).doflocs  # (n_local_nodes, pdim); vertices first, centre last
     xs = []
     for block in blocks:
         idx = np.meshgrid(*(np.arange(len(a) - 1) for a in block.axes), indexing="ij")
@@ -401,7 +407,16 @@ def assemble_blocks(blocks, keep: Callable[[np.ndarray], np.ndarray]) -> MeshQua
         param = lo[:, :, None] + (hi - lo)[:, :, None] * ref.T[:, None, :]
         x = block.to_mesh(param.reshape(pdim, -1))
         xs.append(x.reshape(x.shape[0], lo.shape[1], ref.shape[0]))
-    x = np.concatenate(xs, axis=1)
+    return mesh_from_points(np.concatenate(xs, axis=1), keep)
+
+
+def mesh_from_points(x: np.ndarray, keep: Callable[[np.ndarray], np.ndarray]) -> MeshQuad2 | MeshHex2:
+    """Quadratic mesh of elements given by their nodes ``x`` (dim, n_elements, 9 | 27) in the
+    order of scikit-fem's reference element (``ElementQuad2`` / ``ElementHex2.doflocs``);
+    ``keep(centres)`` selects the elements. Coincident nodes are merged by position."""
+    pdim = x.shape[0]
+    elem, lin_cls, quad_cls = (ElementQuad2, MeshQuad1, MeshQuad2Curved) if pdim == 2 else (ElementHex2, MeshHex1, MeshHex2Curved)
+    ref = elem.doflocs
     x = x[:, keep(x[:, :, -1])]
     x = _positively_oriented(x, ref)
     n_vert = elem.refdom.nnodes

@@ -9,7 +9,7 @@ from skfem import CellBasis, ElementHex2, ElementQuad2, ElementVector, FacetBasi
 from cases.params import UnsupportedCase
 from cases.geometry import PRISM, RING
 
-from . import forms, laws, regions
+from . import forms, laws, regions, swept
 from .frames import AXISYMMETRIC, SOLID, body_coordinates, body_rotation, in_intervals, section_of, x3_of
 from .mass import consistent_mass, lumped_mass, redistributed_mass
 from .mesh import RefMesh, build_mesh
@@ -113,6 +113,8 @@ class Model:
         """Boundary facets on a named (or parametric) section edge."""
         mesh = self.rmesh.mesh
         facets = mesh.boundary_facets()
+        if self.case.section.kind == "mesh":
+            return swept.edge_facets(self.case, self.rep, mesh, self.rmesh.section, facets, edge)
         name = self.case.section.edge(edge)
         axis = self.case.section.s if name[0] == "s" else self.case.section.t
         target = axis.span[0] if name.endswith("min") else axis.span[1]

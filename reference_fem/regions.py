@@ -5,7 +5,8 @@ material; ``case.materials`` lists them, index 0 the case's ``material`` (outsid
 Every per-element array of the reference (Lame constants and the law at the quadrature points,
 density, the CalculiX element sets, the ``region`` cell array) is made from one index per
 element, ``materials[index]``; only :func:`element_index`, the lookup of that index, depends on
-how a region is given (here a parametric box of the mapped block).
+how a region is given (a parametric box of the mapped block, or a mesh section's physical
+surface: the region of the section element an element's centre lies in).
 """
 
 from __future__ import annotations
@@ -31,10 +32,10 @@ def element_index(case, s: np.ndarray, t: np.ndarray) -> np.ndarray:
     width s) counts as inside every region's range along it, which each region must then span
     (as a cut-out must).
     """
-    named = [r.name for r in case.regions if r.s_range is None]
-    if named:
-        raise UnsupportedCase(f"reference solver: regions {', '.join(named)} are a mesh section's physical "
-                              "surfaces; the reference meshes the mapped block only")
+    if case.section.kind == "mesh":  # (s, t) = (x1, x2): the region of the section element each lies in
+        sec = case.section
+        parent = sec.locate(np.asarray(s, float), np.asarray(t, float))[0]
+        return case.material_index(st=sec.x[sec.elements[:, 8]], region_elements=sec.regions)[parent]
     st = []
     for values, axis, which in ((s, case.section.s, "s_range"), (t, case.section.t, "t_range")):
         values = np.asarray(values, float)

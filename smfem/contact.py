@@ -404,6 +404,11 @@ def face_free_mass(model, edge: str, i: int = 0) -> np.ndarray:
     """
     m = model.full_mass(i, i).reshape(-1, 3).copy()
     mesh = model.mesh
+    if mesh.shape is None:
+        face, inside = _next_row_in(mesh, edge)
+        m[inside] += m[face]
+        m[face] = 0.0
+        return m.ravel()
     ns, nt = mesh.shape
     grid = np.arange(mesh.n_nodes).reshape(mesh.order * nt + 1, mesh.order * ns + 1)  # mid-sides too
     face, inside = {"s_min": (grid[:, 0], grid[:, 1]), "s_max": (grid[:, -1], grid[:, -2]),
@@ -411,6 +416,28 @@ def face_free_mass(model, edge: str, i: int = 0) -> np.ndarray:
     m[inside] += m[face]
     m[face] = 0.0
     return m.ravel()
+
+
+#: per order, the local node next in from each node of an element's edge k (its nodes in the
+#: order of :meth:`cases.section_mesh.SectionMesh.edge_segments`), as functions of k
+_ACROSS = {1: lambda k: ((k + 3) % 4, (k + 2) % 4),
+           2: lambda k: (4 + (k + 3) % 4, 8, 4 + (k + 1) % 4)}
+
+
+def _next_row_in(mesh, edge: str) -> tuple[np.ndarray, np.ndarray]:
+    """An unstructured section's face nodes on ``edge`` and, for each, the node one row in
+    across its owner element (a structured grid's next row)."""
+    seg, owner = mesh.edge_segments(edge)
+    local = mesh.elements[owner]  # (n_seg, nodes)
+    first = np.argmax(local == seg[:, :1], axis=1)  # the segment's first corner in its element
+    second = np.argmax(local == seg[:, -1:], axis=1)
+    k = np.where((second - first) % 4 == 1, first, second)  # the edge k -> k + 1 the segment runs on
+    reverse = k != first  # the segment runs k + 1 -> k
+    across = np.array([_ACROSS[mesh.order](int(j)) for j in k])  # (n_seg, order + 1), along k -> k + 1
+    across = np.where(reverse[:, None], across[:, ::-1], across)
+    targets = local[np.arange(len(seg))[:, None], across]
+    face, where = np.unique(seg.ravel(), return_index=True)
+    return face, targets.ravel()[where]
 
 
 class ContactSystem:

@@ -1,0 +1,85 @@
+"""Reference meshes of a mesh section (:class:`cases.msh_section.MeshSection`): its 9-node
+quadrilaterals as they are (the axisymmetric 2D model and the harmonic model), or swept round
+the axis (a ring) or along the length (a prism) into 27-node hexahedra (3D).
+
+Every node of a hexahedron is the image of its reference position under the section element's
+own 9-node map times the sweep, so curved section edges stay curved. ``refine = k`` splits each
+section element k x k (:func:`cases.section_mesh.section_mesh`): the 3D model cannot halve a
+mesh section as it halves a block's counts, so its section is the 2D one. The circumference of a
+ring gets ``N_THETA * refine`` elements, a prism's span elements as long as the section's
+median element. Break points (load patches, cut-outs, probes) along x3 are element boundaries.
+
+Named edges are found by the section's own segments: a boundary facet lies on edge ``name``
+when the section points of its vertices are the two ends of one of that edge's segments.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+from skfem import ElementHex2
+
+from cases.geometry import RING
+from cases.msh_section import shape
+from cases.params import UnsupportedCase
+from cases.section_mesh import section_mesh
+
+from .frames import AXISYMMETRIC, SOLID, to_cartesian
+
+
+def swept_mesh(case, rep: str, keep: Callable[[np.ndarray], np.ndarray]):
+    """The reference mesh of ``case`` (a mesh section) in representation ``rep``."""
+    from .mesh import N_THETA, RefMesh, _breaks, _span_nodes, mesh_from_points
+
+    sec = section_mesh(case.section, case.mesh_scale, order=2)
+    X = sec.x[sec.elements]  # (n_el, 9, 2) in scikit-fem's ElementQuad2 node order
+    if rep == AXISYMMETRIC:
+        mesh = mesh_from_points(X.transpose(2, 0, 1), keep)
+        return RefMesh(mesh, rep, {"section": len(X), "elements": mesh.nelements}, sec)
+    if rep != SOLID:
+        raise UnsupportedCase(f"reference solver: {case.name}: a mesh section has no plane-strain 2D form; use dim=3")
+    if case.body == RING and np.abs(sec.x[:, 0]).min() <= 1e-9 * np.abs(sec.x).max():
+        raise UnsupportedCase(f"reference solver: {case.name}: a mesh section that touches the axis has no 3D form "
+                              "(its swept elements would collapse on the axis); use dim=2 where the case is "
+                              "axisymmetric")
+    x3_extra = _breaks(case, rep)[2]
+    if case.body == RING:
+        x3 = _span_nodes(0.0, 2 * np.pi, x3_extra, 2 * np.pi / (N_THETA * case.mesh_scale))
+    else:
+        sizes = np.linalg.norm(X[:, 2] - X[:, 0], axis=1) / np.sqrt(2)
+        x3 = _span_nodes(0.0, case.length, x3_extra, float(np.median(sizes)))
+    ref = ElementHex2.doflocs  # (27, 3) in [0, 1]^3
+    N = shape(2 * ref[:, 0] - 1, 2 * ref[:, 1] - 1)[0]  # (27, 9)
+    section_points = np.einsum("pn,enc->epc", N, X)  # (n_el, 27, 2)
+    along = x3[:-1, None] + np.diff(x3)[:, None] * ref[None, :, 2]  # (n_x3, 27)
+    x1 = np.broadcast_to(section_points[None, :, :, 0], (len(along),) + section_points.shape[:2])
+    x2 = np.broadcast_to(section_points[None, :, :, 1], x1.shape)
+    a = np.broadcast_to(along[:, None, :], x1.shape)
+    if case.body == RING:
+        points = np.array([x1 * np.cos(a), x1 * np.sin(a), x2])
+    else:
+        points = np.array([a, x1, x2])
+    mesh = mesh_from_points(points.reshape(3, -1, 27), keep)
+    counts = {"section": len(X), "x3": len(x3) - 1, "elements": mesh.nelements}
+    return RefMesh(mesh, rep, counts, sec)
+
+
+def edge_facets(case, rep: str, mesh, section, facets: np.ndarray, edge: str) -> np.ndarray:
+    """Those of boundary ``facets`` of a reference ``mesh`` (representation ``rep``) that lie on
+    the mesh section's edge ``edge``; ``section``: the section's quadratic mesh the reference
+    mesh was made from."""
+    seg, _ = section.edge_segments(edge)
+    scale = 1e-7 * np.abs(section.x).max()
+    key = lambda p: [tuple(k) for k in np.round(np.asarray(p) / scale).astype(np.int64)]  # noqa: E731
+    ends = {frozenset(pair) for pair in zip(key(section.x[seg[:, 0]]), key(section.x[seg[:, -1]]))}
+    corners = mesh.p[:, mesh.facets[:, facets].T]  # (dim, n_facets, n_vertices)
+    xc = to_cartesian(case, rep, corners.reshape(corners.shape[0], -1))
+    x1, x2 = (np.hypot(xc[0], xc[1]), xc[2]) if case.body == RING else (xc[1], xc[2])
+    points = key(np.column_stack([x1, x2]))
+    n = corners.shape[2]
+    on = [frozenset(points[i * n:(i + 1) * n]) in ends for i in range(len(facets))]
+    found = facets[np.array(on, bool)]
+    if found.size == 0:
+        raise ValueError(f"reference solver: edge {edge!r} has no boundary facets")
+    return found
