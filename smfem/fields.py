@@ -42,7 +42,8 @@ def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: 
     (the plastic strain at the sample points, (n_elements, section points, n_x3_points), at
     ``peps_x3`` along x3) each cell also carries the element's mean over its section points at
     the x3 point nearest to the cell's middle.
-    ``solid`` (cell data, 0/1) is 0 in the cut-outs, whose fictitious material the field carries.
+    ``solid`` (cell data, 0/1) is 0 in the cut-outs, whose fictitious material the field carries;
+    ``region`` is each cell's index into ``case.materials`` (0: the body's material).
     """
     mesh, body = model.mesh, model.body
     ring = body == RING
@@ -69,7 +70,9 @@ def field_mesh(model, u_modes: list[np.ndarray], n_x3: int | None = None, peps: 
         local = local - relaxed[:, :, nearest].transpose(2, 1, 0)
     cell_data = {"stress": [_to_cartesian(model, local, middle).reshape(-1, 9)],
                  # 0 in a cut-out: fictitious material whose values a viewer masks (Threshold solid >= 1)
-                 "solid": [(inhomogeneity.element_factor(model.case, mesh, middle).T == 1.0).astype(np.uint8).ravel()]}
+                 "solid": [(inhomogeneity.element_factor(model.case, mesh, middle).T == 1.0).astype(np.uint8).ravel()],
+                 # the index of each cell's material in case.materials (0: the body's, then the regions')
+                 "region": [np.tile(model.material_index.astype(np.int32), len(middle))]}
     if peps is not None:
         cell_data["peps"] = [peps.mean(axis=1)[:, nearest].T.ravel()]
     return meshio.Mesh(points.reshape(-1, 3), [(HEX_TYPE[order], hexes.reshape(-1, len(level)))],

@@ -39,3 +39,5 @@ def test_the_plastic_variant_yields_both_layers():
     centres = mesh.points[mesh.cells[0].data].mean(axis=1)
     r = np.hypot(centres[:, 0], centres[:, 1])
     assert peps[r < 1.4].max() > 1e-4 and peps[r > 1.4].max() > 1e-4
+    region = mesh.cell_data["region"][0]  # for ParaView: each cell's material
+    assert np.all(region == (r > 1.4))
