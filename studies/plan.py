@@ -216,6 +216,13 @@ def quick() -> tuple[CaseStudy, ...]:
             _s(REF3D, *grid("rod_impact", _r(1), (0.25, 0.5, 1))),
             _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 4}), truth=TruthPlan(TIME_TRUTH, refine=(2, 4))),
+        # the sections issue's scenes: light series (the full report carries the rest)
+        CaseStudy("layered_cylinder", (
+            _s(SMFEM, *grid("layered_cylinder", ({"harmonics": 20}, {"refine": 2, "harmonics": 40}), (1, 2, 4))),
+            _s(REF2D, *grid("layered_cylinder", _r(1, 2), (1, 2, 4))),
+            _s(CALCULIX, {}),
+        ), reference=(REF2D, {"refine": 2}),
+            truth=TruthPlan(MODAL_TRUTH, refine=(1, 2, 4), harmonics=(20, 40, 80))),
     )
 
 
@@ -262,6 +269,16 @@ def full() -> tuple[CaseStudy, ...]:
             _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 8}),
             truth=explicit_truth()),
+        CaseStudy("layered_cylinder", (
+            _s(SMFEM, *grid("layered_cylinder", ({"harmonics": 20}, {"refine": 2, "harmonics": 40},
+                                                 {"refine": 4, "harmonics": 80}), (1, 2, 4, 8, 16))),
+            _s(SMFEM_QUAD9, *grid("layered_cylinder", ({"harmonics": 40},), (4, 16)),
+               *grid("layered_cylinder", ({"harmonics": 80},), (16, 32))),
+            _s(REF2D, *grid("layered_cylinder", _r(1, 2), (1, 2, 4, 8, 16))),
+            _s(REF3D, *grid("layered_cylinder", _r(1), (1, 2, 4))),
+            _s(CALCULIX, {}),
+        ), reference=(REF2D, {"refine": 4}),
+            truth=TruthPlan(MODAL_TRUTH, refine=(4, 8, 16), harmonics=(320, 640, 1280))),
     )
 
 
