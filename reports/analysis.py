@@ -110,7 +110,7 @@ def _run_rows(cr: CaseRuns, case, truth, reference, points) -> list[dict]:
     rows = []
     families = {p.name: family_of(p) for p in case.probes}
     window = case.references.get("comparison_window_s", 0.0)
-    same_dt = _dt(cr.reference) if cr.reference.summary else case.dt
+    same_dt = _dt(cr.reference) if cr.reference is not None and cr.reference.summary else case.dt
     for solver, runs in cr.series.items():
         for run in runs:
             if not run.usable:
@@ -223,7 +223,7 @@ def _published_rows(case, cr: CaseRuns, points) -> list[dict]:
 def analyse(cr: CaseRuns) -> CaseAnalysis:
     """Every measure the report shows for one case."""
     case = get_case(cr.study.case, cr.study.base)
-    reference = best_history(case, cr.reference)
+    reference = best_history(case, cr.reference) if cr.reference is not None else None
     points = published_points(case)
     errors = pd.DataFrame(_run_rows(cr, case, cr.truth, reference, points))
     an = CaseAnalysis(cr, case, cr.truth, reference, errors, {}, pd.DataFrame(), pd.DataFrame())

@@ -29,7 +29,8 @@ def runs_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     rows = []
     for an in analyses:
         tagged = [(s, "series", r) for s, runs in an.runs.series.items() for r in runs]
-        tagged.append((an.runs.reference.job.solver, "same-dt reference", an.runs.reference))
+        if an.runs.reference is not None:
+            tagged.append((an.runs.reference.job.solver, "same-dt reference", an.runs.reference))
         tagged += [(r.job.solver, f"truth: {role[0]} {role[1]}", r) for role, r in an.runs.truth_runs.items()]
         estimated = _estimated_errors(an)
         for solver, role, run in tagged:

@@ -27,7 +27,8 @@ class CaseRuns:
 
     study: CaseStudy
     series: dict[str, list[Run]]
-    reference: Run
+    #: None where the study has no same-dt reference (its reference FEM is 3D only and past it)
+    reference: Run | None
     fields: Run | None
     truth: Truth | None = None
     truth_runs: dict = field(default_factory=dict)
@@ -35,7 +36,8 @@ class CaseRuns:
     estimates: dict = field(default_factory=dict)
 
     def all_runs(self) -> list[Run]:
-        return [r for runs in self.series.values() for r in runs] + [self.reference, *self.truth_runs.values()]
+        return [r for runs in self.series.values() for r in runs] + [r for r in (self.reference,) if r is not None] + [
+            *self.truth_runs.values()]
 
 
 @dataclass
@@ -78,7 +80,7 @@ def _jobs(study: CaseStudy, stored: bool) -> tuple[dict, Job, Job, dict]:
     series = {s.solver: [job(s.solver, level) for level in s.levels] for s in study.series}
     fields = next((j for j in series.get(SMFEM, ()) if j.fields), None) or job(SMFEM, {})
     truth = truth_jobs(study.case, study.truth, study.base) if study.truth and not stored else {}
-    return series, job(*study.reference), fields, truth
+    return series, job(*study.reference) if study.reference else None, fields, truth
 
 
 def _cost_order(job: Job) -> tuple:
@@ -124,7 +126,7 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
     layout = [(study, *_jobs(study, stored[study.case][0] is not None)) for study in plan]
     estimated = {study.case: effectivity.planned(study, job_of(study)) for study in plan}
     every = [job for _, series, ref, fields, truth in layout
-             for job in [*sum(series.values(), []), ref, fields, *truth.values()]]
+             for job in [*sum(series.values(), []), ref, fields, *truth.values()] if job is not None]
     every += [j for jobs in estimated.values() for run, comps in jobs.values() for j in [run, *comps]]
     runs, executed, cached = run_cached(every, cache, scheduler, workers, progress)
     # the companions an estimate asks for once it has seen the others, in parallel too
@@ -140,6 +142,7 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
             made = assemble(study.case, study.truth, study.base, truth_runs)
             if made is not None:
                 made.source = f"computed by this study ({why})"
-        cases.append(CaseRuns(study, {s: [runs[j] for j in js] for s, js in series.items()}, runs[ref], runs[fields],
+        cases.append(CaseRuns(study, {s: [runs[j] for j in js] for s, js in series.items()},
+                              runs[ref] if ref is not None else None, runs[fields],
                               made, truth_runs, effectivity.measure(study, estimated[study.case], runs.__getitem__)))
     return StudyResult(cases, executed=executed, cached=cached, wall_time_s=time.perf_counter() - wall0)

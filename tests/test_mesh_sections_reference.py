@@ -65,3 +65,19 @@ def test_what_the_reference_cannot_mesh_is_refused_in_one_line(tmp_path):
     with pytest.raises(UnsupportedCase, match="cannot be coarsened"):
         solve("reference-2d", dataclasses.replace(ring_case(tmp_path, 2), params={**ring_case(tmp_path, 2).params,
                                                                                  "coarsen": 2}))
+
+
+@pytest.mark.parametrize("name", ["dome", "rod_impact"])
+def test_the_unstructured_examples_are_the_builtin_scenes_on_a_gmsh_section(name):
+    from pathlib import Path
+
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    builtin, mesh = get_case(name), get_case(examples / f"{name}_unstructured.toml")
+    assert mesh.section.kind == "mesh" and mesh.name == f"{name}_unstructured"
+    for field in ("body", "material", "loads", "supports", "probes", "params", "wall", "axisymmetric"):
+        assert getattr(mesh, field) == getattr(builtin, field), field
+    short = {"t_end": 20 * builtin.dt}
+    a = solve("smfem", get_case(name, short)).history
+    b = solve("smfem", get_case(examples / f"{name}_unstructured.toml", short)).history
+    probe = builtin.probe_names[-1]
+    assert relative(b[probe], a[probe]) < 0.05  # the same body, another mesh
