@@ -32,9 +32,9 @@ from cases.params import UnsupportedCase
 
 from . import regions
 from .frames import AXISYMMETRIC
-from .mesh import Block, assemble_blocks, axis_nodes
+from .mesh import Block, assemble_blocks, axis_nodes, mesh_from_points
 from .model import INTORDER
-from .swept import edge_facets, swept_mesh
+from .swept import edge_facets, element_nodes, section_elements
 
 #: components of a harmonic's amplitude vector, in dof order: U (x1), W (x2), V (x3)
 N_COMP = 3
@@ -116,8 +116,8 @@ class HarmonicModel:
         #: a mesh section's own quadratic mesh (its named edges), else None
         self.section = None
         if sec.kind == "mesh":  # its 9-node elements as they are, split refine x refine
-            swept = swept_mesh(case, AXISYMMETRIC, lambda x: np.ones(x.shape[1], bool))
-            self.mesh, self.section = swept.mesh, swept.section
+            self.section = section_elements(case)
+            self.mesh = mesh_from_points(element_nodes(case, self.section, None), lambda x: np.ones(x.shape[1], bool))
         else:
             # the regions' box limits are node lines, as in the reference's own meshes
             boxes = [r for r in case.regions if r.s_range is not None]

@@ -42,6 +42,7 @@ from skfem.mapping import MappingIsoparametric
 from cases.params import UnsupportedCase
 from cases.geometry import RING
 
+from . import swept
 from .frames import AXISYMMETRIC, PLANE_STRAIN, SOLID, in_intervals, representation, section_of, x3_of
 
 #: elements around the circumference of a (non-axisymmetric) ring at refine = 1: the
@@ -147,9 +148,7 @@ def build_mesh(case, grading: float = 1.0) -> RefMesh:
         raise ValueError(f"grading must be at least 1, not {grading!r}")
     rep = representation(case)
     if case.section.kind == "mesh":
-        from .swept import swept_mesh
-
-        return swept_mesh(case, rep, lambda x: ~_in_cutouts(case, rep, x))
+        return _mesh_section(case, rep)
     dim = 3 if rep == SOLID else 2
     scale = SECTION_SCALE[dim] * case.mesh_scale
     sec = case.section
@@ -196,6 +195,23 @@ def build_mesh(case, grading: float = 1.0) -> RefMesh:
 
     mesh = assemble_blocks(blocks, keep)
     return RefMesh(mesh, rep, dict(counts, elements=mesh.nelements))
+
+
+def _mesh_section(case, rep: str) -> RefMesh:
+    """A mesh section's reference mesh (:mod:`reference_fem.swept`): its 9-node elements, or
+    swept into 27-node hexahedra over ``N_THETA * refine`` intervals round a ring, or along a
+    prism in elements as long as the section's median one; x3 break points are nodes."""
+    section = swept.section_elements(case)
+    swept.check_sweepable(case, rep, section)
+    x3 = None
+    if rep == SOLID:
+        extra = _breaks(case, rep)[2]
+        x3 = (_span_nodes(0.0, 2 * np.pi, extra, 2 * np.pi / (N_THETA * case.mesh_scale)) if case.body == RING
+              else _span_nodes(0.0, case.length, extra, swept.median_size(section)))
+    mesh = mesh_from_points(swept.element_nodes(case, section, x3), lambda x: ~_in_cutouts(case, rep, x))
+    counts = {"section": len(section.elements), **({"x3": len(x3) - 1} if x3 is not None else {}),
+              "elements": mesh.nelements}
+    return RefMesh(mesh, rep, counts, section)
 
 
 @dataclass(frozen=True)

@@ -15,8 +15,6 @@ when the section points of its vertices are the two ends of one of that edge's s
 
 from __future__ import annotations
 
-from typing import Callable
-
 import numpy as np
 from skfem import ElementHex2
 
@@ -28,41 +26,46 @@ from cases.section_mesh import section_mesh
 from .frames import AXISYMMETRIC, SOLID, to_cartesian
 
 
-def swept_mesh(case, rep: str, keep: Callable[[np.ndarray], np.ndarray]):
-    """The reference mesh of ``case`` (a mesh section) in representation ``rep``."""
-    from .mesh import N_THETA, RefMesh, _breaks, _span_nodes, mesh_from_points
+def section_elements(case):
+    """The mesh section's own 9-node mesh at the case's refinement (each element split refine x
+    refine), in scikit-fem's ``ElementQuad2`` node order."""
+    return section_mesh(case.section, case.mesh_scale, order=2)
 
-    sec = section_mesh(case.section, case.mesh_scale, order=2)
-    X = sec.x[sec.elements]  # (n_el, 9, 2) in scikit-fem's ElementQuad2 node order
+
+def check_sweepable(case, rep: str, section) -> None:
+    """Refuse the representations a mesh section has no form in, in one line."""
     if rep == AXISYMMETRIC:
-        mesh = mesh_from_points(X.transpose(2, 0, 1), keep)
-        return RefMesh(mesh, rep, {"section": len(X), "elements": mesh.nelements}, sec)
+        return
     if rep != SOLID:
         raise UnsupportedCase(f"reference solver: {case.name}: a mesh section has no plane-strain 2D form; use dim=3")
-    if case.body == RING and np.abs(sec.x[:, 0]).min() <= 1e-9 * np.abs(sec.x).max():
+    if case.body == RING and np.abs(section.x[:, 0]).min() <= 1e-9 * np.abs(section.x).max():
         raise UnsupportedCase(f"reference solver: {case.name}: a mesh section that touches the axis has no 3D form "
                               "(its swept elements would collapse on the axis); use dim=2 where the case is "
                               "axisymmetric")
-    x3_extra = _breaks(case, rep)[2]
-    if case.body == RING:
-        x3 = _span_nodes(0.0, 2 * np.pi, x3_extra, 2 * np.pi / (N_THETA * case.mesh_scale))
-    else:
-        sizes = np.linalg.norm(X[:, 2] - X[:, 0], axis=1) / np.sqrt(2)
-        x3 = _span_nodes(0.0, case.length, x3_extra, float(np.median(sizes)))
+
+
+def median_size(section) -> float:
+    """The section elements' median size (diagonal / sqrt 2): a prism's element length along x3."""
+    X = section.x[section.elements]
+    return float(np.median(np.linalg.norm(X[:, 2] - X[:, 0], axis=1) / np.sqrt(2)))
+
+
+def element_nodes(case, section, x3: np.ndarray | None) -> np.ndarray:
+    """Node coordinates of the reference elements, ``(dim, n_elements, 9 | 27)`` in scikit-fem's
+    reference order: the section's 9-node elements (``x3`` None), or each swept over every
+    interval of the ``x3`` nodes, round the axis (a ring) or along the length (a prism)."""
+    X = section.x[section.elements]  # (n_el, 9, 2) in scikit-fem's ElementQuad2 node order
+    if x3 is None:
+        return X.transpose(2, 0, 1)
     ref = ElementHex2.doflocs  # (27, 3) in [0, 1]^3
-    N = shape(2 * ref[:, 0] - 1, 2 * ref[:, 1] - 1)[0]  # (27, 9)
-    section_points = np.einsum("pn,enc->epc", N, X)  # (n_el, 27, 2)
+    N = shape(2 * ref[:, 0] - 1, 2 * ref[:, 1] - 1)[0]  # (27, 9): the section element's map
+    points = np.einsum("pn,enc->epc", N, X)  # (n_el, 27, 2)
     along = x3[:-1, None] + np.diff(x3)[:, None] * ref[None, :, 2]  # (n_x3, 27)
-    x1 = np.broadcast_to(section_points[None, :, :, 0], (len(along),) + section_points.shape[:2])
-    x2 = np.broadcast_to(section_points[None, :, :, 1], x1.shape)
+    x1 = np.broadcast_to(points[None, :, :, 0], (len(along),) + points.shape[:2])
+    x2 = np.broadcast_to(points[None, :, :, 1], x1.shape)
     a = np.broadcast_to(along[:, None, :], x1.shape)
-    if case.body == RING:
-        points = np.array([x1 * np.cos(a), x1 * np.sin(a), x2])
-    else:
-        points = np.array([a, x1, x2])
-    mesh = mesh_from_points(points.reshape(3, -1, 27), keep)
-    counts = {"section": len(X), "x3": len(x3) - 1, "elements": mesh.nelements}
-    return RefMesh(mesh, rep, counts, sec)
+    out = np.array([x1 * np.cos(a), x1 * np.sin(a), x2] if case.body == RING else [a, x1, x2])
+    return out.reshape(3, -1, 27)
 
 
 def edge_facets(case, rep: str, mesh, section, facets: np.ndarray, edge: str) -> np.ndarray:
