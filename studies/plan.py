@@ -233,7 +233,7 @@ def quick() -> tuple[CaseStudy, ...]:
         # its reference FEM is 3D only (the load is not axisymmetric): 1.3 million unknowns at the
         # kept section, past the quick report; SMFEM against the stored truth
         CaseStudy("flywheel", (
-            _s(SMFEM, *grid("flywheel", ({},), (1, 2, 4))),
+            _s(SMFEM, *grid("flywheel", ({},), (0.5, 1, 2))),
         ), reference=None,
             truth=FLYWHEEL_TRUTH),
     )
