@@ -144,12 +144,13 @@ def test_every_case_of_the_quick_report_has_a_truth():
     for study in quick():
         # three time steps per solver (two for the 3D reference on the notched scenes, where its
         # mesh limits it); CalculiX is one point at the case's settings (its runs cost 100 times
-        # the reference's on the same mesh), left to the full report on the notched scenes
+        # the reference's on the same mesh), left to the full report on the notched scenes; the
+        # flywheel has neither (its reference FEM and CalculiX are 3D only: 1.3 million unknowns)
         dts = {s.solver: {level.get("dt") for level in s.levels} for s in study.series if s.solver != CALCULIX}
         notched = study.case.startswith("notched")
         assert all(len(d) >= (2 if notched and solver == REF3D else 3) for solver, d in dts.items()), (study.case, dts)
         calculix = [s.levels for s in study.series if s.solver == CALCULIX]
-        assert calculix == ([] if notched else [({},)])
+        assert calculix == ([] if notched or study.case == "flywheel" else [({},)])
 
 
 def test_dome_orders_and_published_extrema_are_tabulated(tiny):
