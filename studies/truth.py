@@ -164,7 +164,8 @@ def plan_for(name: str, base: dict, settings: str = "quick") -> TruthPlan:
     for ``full`` settings where it can run the case, time-step halving otherwise, on a
     reference that can run it (2D where the scene has a 2D form)."""
     full_ = settings == "full"
-    plan = {s.case: s for s in (full() if full_ else quick())}[name].truth
+    studies = {s.case: s for s in (*full(), *(() if full_ else quick()))}  # a scene only the full study has
+    plan = studies[name].truth
     case = get_case(name, base)
     modal_ok = not modal_unsupported(case)
     if plan.method != MODAL_TRUTH and modal_ok:
