@@ -120,8 +120,13 @@ class Case:
         for k, r in enumerate(self.regions, start=1):
             if r.s_range is not None:
                 index[r.contains(st[:, 0], st[:, 1])] = k
+            elif r.name in (region_elements or {}):
+                index[np.asarray(region_elements[r.name], int)] = k
             else:
-                index[np.asarray((region_elements or {})[r.name], int)] = k
+                from .params import UnsupportedCase
+
+                raise UnsupportedCase(f"{self.name}: region {r.name!r} names a physical surface, which this section "
+                                      f"has not (a mapped block has none: give the region s_range and t_range)")
         return index
 
     @property
