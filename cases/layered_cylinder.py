@@ -12,19 +12,18 @@ about 0.6 % in each by t_end: tests/test_layered.py), and the axial element leng
 element, as long as a radial one of the inner layer).
 """
 
-import math
 
 from .case import Case
 from .geometry import RING, Axis, Pressure, Probe, Region, Section, Support
 from .material import Material
 from .params import COMMON, MAX_STRESS, MIN_MODULUS, Spec
+from .thick_cylinder import PATCHES, patch_probes
 
 NAME = "layered_cylinder"
 TITLE = "Bonded steel-aluminium cylinder, pressure on two opposite 90 deg patches (plane strain)"
 R1, R_I, R2 = 1.0, 1.4, 2.0
 N_INNER, N_OUTER = 8, 12
 Q_ELASTIC, Q_PLASTIC = 1.0, 5.0e7
-PATCHES = ((-math.pi / 4, math.pi / 4), (3 * math.pi / 4, 5 * math.pi / 4))
 
 DEFAULTS = dict(
     dt=4e-5, t_end=4e-3, refine=1, harmonics=20, E=2.1e11, nu=0.3, rho=7.8e3, tau_s=1.7e8,
@@ -52,12 +51,7 @@ def build(p: dict) -> Case:
         edges={"inner": "s_min", "outer": "s_max"},
     )
     outer = Material(p["E_outer"], p["nu_outer"], p["rho_outer"], p["tau_s_outer"], plastic=p["plastic"])
-    probes = [
-        Probe("A_ur", "point", "u", (1,), point=(R2, 0.0, 0.0)),
-        Probe("B_ut", "point", "u", (3,), point=(R2, 0.0, math.pi / 4)),
-        Probe("C_ur", "point", "u", (1,), point=(R1, 0.0, math.pi / 2)),
-        Probe("I_ur", "point", "u", (1,), point=(R_I, 0.0, 0.0)),
-    ]
+    probes = patch_probes(R1, R2) + [Probe("I_ur", "point", "u", (1,), point=(R_I, 0.0, 0.0))]
     if p["plastic"]:
         probes.append(Probe("peps_max", "max", "peps"))
     return Case(

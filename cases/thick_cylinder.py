@@ -31,6 +31,15 @@ PROVENANCE = dict(
 )
 
 
+def patch_probes(r_inner: float, r_outer: float) -> list[Probe]:
+    """Probes A, B, C of a cylinder under the two patches (the layered cylinder's too)."""
+    return [
+        Probe("A_ur", "point", "u", (1,), point=(r_outer, 0.0, 0.0)),
+        Probe("B_ut", "point", "u", (3,), point=(r_outer, 0.0, math.pi / 4)),
+        Probe("C_ur", "point", "u", (1,), point=(r_inner, 0.0, math.pi / 2)),
+    ]
+
+
 def build(p: dict) -> Case:
     p = dict(p, q=p["q"] if p["q"] is not None else (Q_PLASTIC if p["plastic"] else Q_ELASTIC))
     dz = (R2 - R1) / N_R
@@ -38,11 +47,7 @@ def build(p: dict) -> Case:
         "rect", s=Axis((R1, R2), (N_R,)), t=Axis((0.0, dz), (1,), refinable=False),
         edges={"inner": "s_min", "outer": "s_max"},
     )
-    probes = [
-        Probe("A_ur", "point", "u", (1,), point=(R2, 0.0, 0.0)),
-        Probe("B_ut", "point", "u", (3,), point=(R2, 0.0, math.pi / 4)),
-        Probe("C_ur", "point", "u", (1,), point=(R1, 0.0, math.pi / 2)),
-    ]
+    probes = patch_probes(R1, R2)
     if p["plastic"]:
         probes += [
             Probe("peps_A", "point", "peps", point=(1.0333, dz / 2, 0.0)),
