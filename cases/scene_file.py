@@ -354,13 +354,7 @@ class _Scene:
                                    f"{', '.join(self.section.regions)})")
                 box = (None, None)
             else:
-                box = []
-                for key, axis in (("s_range", self.section.s), ("t_range", self.section.t)):
-                    a, b = t.numbers(key, 2)
-                    lo, hi = axis.span
-                    if not lo <= a < b <= hi:
-                        t.fail(key, f"[{a:g}, {b:g}] is outside the section or empty: need {lo:g} <= a < b <= {hi:g}")
-                    box.append((a, b))
+                box = self.read_box(t, empty=False)
             E = t.number("E", p["E"], lo=0.0)
             E_T = t.number("E_T", 0.0, lo=0.0)
             if E <= 0 or E_T >= E:
@@ -503,15 +497,22 @@ class _Scene:
 
     def read_cutout(self, t: _Table) -> Cutout | None:
         """A cut-out, or None where its section box is empty (so ``notch_depth = 0`` is no notch)."""
+        box = self.read_box(t, empty=True)
+        intervals = self.intervals(t, "x3_intervals")
+        return None if any(a == b for a, b in box) else Cutout(box[0], box[1], intervals)
+
+    def read_box(self, t: _Table, empty: bool) -> list[tuple[float, float]]:
+        """``s_range`` and ``t_range``, a box inside the section (a mesh section's: its bounding
+        box); ``empty``: a range may be a point (a cut-out of zero extent is none)."""
         box = []
         spans = self.section.bounds if self.section.kind == "mesh" else (self.section.s.span, self.section.t.span)
         for key, (lo, hi) in zip(("s_range", "t_range"), spans):
             a, b = t.numbers(key, 2)
-            if not lo <= a <= b <= hi:
-                t.fail(key, f"[{a:g}, {b:g}] is outside the section: need {lo:g} <= a <= b <= {hi:g}")
+            if not (lo <= a <= b <= hi if empty else lo <= a < b <= hi):
+                rule = f"{lo:g} <= a <= b <= {hi:g}" if empty else f"{lo:g} <= a < b <= {hi:g}"
+                t.fail(key, f"[{a:g}, {b:g}] is outside the section{'' if empty else ' or empty'}: need {rule}")
             box.append((a, b))
-        intervals = self.intervals(t, "x3_intervals")
-        return None if any(a == b for a, b in box) else Cutout(box[0], box[1], intervals)
+        return box
 
     def read_velocity(self, t: _Table) -> InitialVelocity:
         return InitialVelocity(t.integer("component", 1, 3), t.number("value"))
