@@ -138,6 +138,11 @@ COMMON = {
     "element": Spec(str, choices=("moment4", "quad9"),
                     help="SMFEM's section element: the paper's moment-scheme quadrilateral (the default) or the "
                          "9-node quadratic (smfem/quad9.py)"),
+    # the 3D reference only, absent from every scene's defaults as element is: a 3D model of a
+    # section with thousands of elements that fits in memory (the flywheel: 64 round would be 1.3
+    # million unknowns, past 24 GB to assemble)
+    "theta_elements": Spec(int, 4, 4096, help="reference FEM 3D: elements round a ring (default 64 x refine); "
+                                             "break points (load patches, cut-outs, probes) add nodes"),
     # SMFEM's linear runs only, absent from every scene's defaults as element is
     "time_scheme": Spec(str, choices=("newmark", "gauss"),
                         help="SMFEM's time integration of an elastic run without contact: Newmark's average "

@@ -8,6 +8,8 @@ yields) and refactorizes the consistent tangent only while points are yielding.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from . import forms
@@ -48,12 +50,18 @@ class Elastic:
         self.M = model.M[free][:, free]
         self.K = model.stiffness()[free][:, free]
         self.A = (self.K + c * self.M).tocsc()
-        self.lu = factorize(self.A)
         self.factorizations = 1
         nc = forms.n_components(model.dim)
         self.sigma = np.zeros((model.n_qp, nc))
         self.law = model.law
         self.state = self.law.initial_state(model.n_qp)
+
+    @functools.cached_property
+    def lu(self):
+        """The factors of ``A``, made when first asked for: after the time march has solved
+        ``M a0 = Q`` and freed the mass's factors: a large 3D run's peak memory holds one set of
+        factors, not both."""
+        return factorize(self.A)
 
     @property
     def peps(self) -> np.ndarray:

@@ -12,7 +12,8 @@ Resolution (``refine`` = ``case.params['refine']`` multiplies every refinable co
   at least 1) in 3D, because one quadratic element spans about two of the paper's bilinear ones;
   axes marked not refinable (one element across a plane-strain width) keep one element;
 - circumference of a ring that is not axisymmetric: ``N_THETA * refine`` elements (64, a
-  multiple of 8 so that the 45 degree patch and cut-out limits are nodes);
+  multiple of 8 so that the 45 degree patch and cut-out limits are nodes), or the case's
+  ``theta_elements`` when it sets one (:func:`theta_step`);
 - span of a prism: elements as long as the section grid's finest refinable element (before
   break points split it);
 - a solid of revolution with an axis (3D dome, rod): an O-grid disk (a square centre block and
@@ -158,7 +159,7 @@ def build_mesh(case, grading: float = 1.0) -> RefMesh:
     t_nodes = axis_nodes(sec.t, scale, t_extra, Grading(t_sing, grading))
     x3_grading = Grading(x3_sing, grading)
     if case.body == RING and rep != AXISYMMETRIC:
-        x3_nodes = _span_nodes(0.0, 2 * np.pi, x3_extra, 2 * np.pi / (N_THETA * case.mesh_scale), x3_grading)
+        x3_nodes = _span_nodes(0.0, 2 * np.pi, x3_extra, theta_step(case), x3_grading)
     elif case.body != RING:
         # the section grid's own finest element, not one a break point cut short: a 0.1 mm
         # notch would otherwise make 3000 elements along a 0.3 m span
@@ -197,16 +198,22 @@ def build_mesh(case, grading: float = 1.0) -> RefMesh:
     return RefMesh(mesh, rep, dict(counts, elements=mesh.nelements))
 
 
+def theta_step(case) -> float:
+    """The longest element round a ring in 3D (rad): ``2 pi / (N_THETA * refine)``, or over the
+    case's ``theta_elements`` when it sets one."""
+    return 2 * np.pi / (case.params.get("theta_elements") or N_THETA * case.mesh_scale)
+
+
 def _mesh_section(case, rep: str) -> RefMesh:
     """A mesh section's reference mesh (:mod:`reference_fem.swept`): its 9-node elements, or
-    swept into 27-node hexahedra over ``N_THETA * refine`` intervals round a ring, or along a
+    swept into 27-node hexahedra over ``N_THETA * refine`` intervals (or ``theta_elements``) round a ring, or along a
     prism in elements as long as the section's median one; x3 break points are nodes."""
     section = swept.section_elements(case)
     swept.check_sweepable(case, rep, section)
     x3 = None
     if rep == SOLID:
         extra = _breaks(case, rep)[2]
-        x3 = (_span_nodes(0.0, 2 * np.pi, extra, 2 * np.pi / (N_THETA * case.mesh_scale)) if case.body == RING
+        x3 = (_span_nodes(0.0, 2 * np.pi, extra, theta_step(case)) if case.body == RING
               else _span_nodes(0.0, case.length, extra, swept.median_size(section)))
     mesh = mesh_from_points(swept.element_nodes(case, section, x3), lambda x: ~_in_cutouts(case, rep, x))
     counts = {"section": len(section.elements), **({"x3": len(x3) - 1} if x3 is not None else {}),

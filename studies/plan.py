@@ -134,6 +134,8 @@ def explicit_truth(**options) -> TruthPlan:
 #: 2 x 2, exact in time (the 9-node reference converges fast here: the two meshes differ by about
 #: 1e-4 at the rim); split 4 x 4 it would be hours (1500 CPU s at 2 x 2)
 FLYWHEEL_TRUTH = TruthPlan(MODAL_TRUTH, refine=(1, 2), harmonics=(6, 12, 24))
+#: the flywheel's 3D runs (reference FEM and CalculiX): as many elements round as fit in memory
+FLYWHEEL_3D = ({"theta_elements": 8}, {"theta_elements": 16})
 
 
 def _s(solver, *levels):
@@ -299,8 +301,13 @@ def full() -> tuple[CaseStudy, ...]:
         ), reference=(REF2D, {"refine": 4}),
             truth=TruthPlan(MODAL_TRUTH, refine=(4, 8, 16), harmonics=(320, 640, 1280))),
         CaseStudy("flywheel", (
-            _s(SMFEM, *grid("flywheel", ({}, {"refine": 2}), (1, 2, 4, 8))),
+            _s(SMFEM, *grid("flywheel", ({}, {"refine": 2}), (0.5, 1, 2, 4, 8))),
             _s(SMFEM_QUAD9, *grid("flywheel", ({},), (1, 2, 4))),
+            # 3D: the section's 808 elements swept over 64 round would be 1.3 million unknowns,
+            # past this machine's 24 GB to assemble; 8 and 16 round fit (10.2 and 15.0 GB at
+            # their peaks, 421 and 871 CPU s). No CalculiX: on the 8-round mesh ccx takes 49 CPU
+            # s a step (two SPOOLES factorizations each), 500 steps (docs/scenes.md, flywheel)
+            _s(REF3D, *FLYWHEEL_3D),
         ), reference=None,
             truth=FLYWHEEL_TRUTH),
     )

@@ -56,6 +56,20 @@ def test_the_swept_3d_mesh_of_an_axisymmetric_scene_agrees_with_the_2d_section(t
     assert relative(three.history["p"], two.history["p"]) < 1e-3
 
 
+def test_theta_elements_sets_the_3d_circumference_of_a_mesh_section_and_of_a_block(tmp_path):
+    """A section of thousands of elements fits in memory in 3D only with fewer elements round
+    than 64 (the flywheel: 1.3 million unknowns at 64); break points still add their nodes."""
+    from reference_fem.mesh import build_mesh
+
+    ring = ring_case(tmp_path, 3)
+    counted = lambda case, **p: build_mesh(dataclasses.replace(case, params={**case.params, **p})).counts  # noqa: E731
+    assert counted(ring)["x3"] == 64 and counted(ring, theta_elements=8)["x3"] == 8
+    patch = ring_case(tmp_path, 3, ((-0.3, 0.3),))  # 0.3 rad: no node of 8 equal elements
+    assert 8 < counted(patch, theta_elements=8)["x3"] <= 10
+    cylinder = get_case("thick_cylinder", {"dim": 3, "theta_elements": 16})
+    assert build_mesh(cylinder).counts["theta"] == 16
+
+
 def test_what_the_reference_cannot_mesh_is_refused_in_one_line(tmp_path):
     rod = get_case("rod_impact", {"dim": 3, "wall_slope": 0.01, "harmonics": 2})
     mesh_rod = dataclasses.replace(rod, section=read_msh(SECTIONS / "rod_impact.msh"))

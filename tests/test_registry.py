@@ -94,7 +94,7 @@ def test_the_table_keeps_the_reports_styles_labels_and_choices():
     """Today's figures: the four solvers of a study drawn as before the table."""
     drawn = {s.name: (s.color, s.marker, s.label) for s in solvers() if s.series}
     assert drawn == {SMFEM: ("C0", "o", "SMFEM"), SMFEM_QUAD9: ("C3", "*", "SMFEM quad9"), REF2D: ("C1", "s", "reference FEM 2D"),
-                     REF3D: ("C2", "^", "reference FEM 3D"), CALCULIX: ("C4", "D", "CalculiX 2D")}
+                     REF3D: ("C2", "^", "reference FEM 3D"), CALCULIX: ("C4", "D", "CalculiX")}
     assert [s.name for s in solvers() if s.command_line] == [SMFEM, REFERENCE, CALCULIX, "reference-explicit"]
     assert {s.name: s.dim for s in solvers() if s.dim} == {REF2D: 2, REF3D: 3}
 
