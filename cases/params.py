@@ -143,6 +143,10 @@ COMMON = {
     # million unknowns, past 24 GB to assemble)
     "theta_elements": Spec(int, 4, 4096, help="reference FEM 3D: elements round a ring (default 64 x refine); "
                                              "break points (load patches, cut-outs, probes) add nodes"),
+    # the 3D reference only, absent from every scene's defaults as element is: the half of a ring
+    # that a 3D analyst would mesh when the loads and the material are mirror-symmetric
+    "mirror": Spec(bool, help="reference FEM 3D on a ring symmetric about theta = 0: the half 0 <= theta <= pi, "
+                              "u_theta = 0 on the mirror planes (theta_elements still counts round the whole)"),
     # SMFEM's linear runs only, absent from every scene's defaults as element is
     "time_scheme": Spec(str, choices=("newmark", "gauss"),
                         help="SMFEM's time integration of an elastic run without contact: Newmark's average "

@@ -159,7 +159,7 @@ def build_mesh(case, grading: float = 1.0) -> RefMesh:
     t_nodes = axis_nodes(sec.t, scale, t_extra, Grading(t_sing, grading))
     x3_grading = Grading(x3_sing, grading)
     if case.body == RING and rep != AXISYMMETRIC:
-        x3_nodes = _span_nodes(0.0, 2 * np.pi, x3_extra, theta_step(case), x3_grading)
+        x3_nodes = _span_nodes(0.0, ring_span(case, rep), x3_extra, theta_step(case), x3_grading)
     elif case.body != RING:
         # the section grid's own finest element, not one a break point cut short: a 0.1 mm
         # notch would otherwise make 3000 elements along a 0.3 m span
@@ -173,6 +173,9 @@ def build_mesh(case, grading: float = 1.0) -> RefMesh:
         counts = {"s": len(s_nodes) - 1, "t": len(t_nodes) - 1}
     elif rep == PLANE_STRAIN:
         blocks, counts = _plane_blocks(case, s_nodes, t_nodes, x3_nodes)
+    elif case.body == RING and _axis_direction(sec) is not None and case.params.get("mirror"):
+        raise UnsupportedCase(f"reference solver: {case.name}: mirror: a solid of revolution that reaches the axis "
+                              "has no half mesh here (its O-grid is whole)")
     elif case.body == RING and _axis_direction(sec) is not None and (case.axisymmetric or not (case.cutouts or case.loads)):
         # the O-grid has no node lines at given angles: fine where no cut-out or load patch needs them
         blocks, counts = _ogrid_blocks(sec, s_nodes, t_nodes)
@@ -198,6 +201,23 @@ def build_mesh(case, grading: float = 1.0) -> RefMesh:
     return RefMesh(mesh, rep, dict(counts, elements=mesh.nelements))
 
 
+def ring_span(case, rep: str) -> float:
+    """The angle a 3D ring's mesh spans: 2 pi, or pi for the case's ``mirror`` half (refused in
+    one line where the half is not the whole's mirror image, :class:`UnsupportedCase`)."""
+    if not case.params.get("mirror"):
+        return 2 * np.pi
+    if case.body != RING or rep != SOLID:
+        raise UnsupportedCase(f"reference solver: {case.name}: mirror is a 3D ring's half (dim=3 on a ring)")
+    if not case.symmetric or case.wall is not None:
+        raise UnsupportedCase(f"reference solver: {case.name}: mirror needs loads and material symmetric about "
+                              "theta = 0 and no wall")
+    outside = [p.name for p in case.probes if p.kind == "point" and np.sin(p.point[2]) < -1e-12]
+    if outside:
+        raise UnsupportedCase(f"reference solver: {case.name}: probe {outside[0]!r} lies outside the mirror half "
+                              "0 <= theta <= pi")
+    return np.pi
+
+
 def theta_step(case) -> float:
     """The longest element round a ring in 3D (rad): ``2 pi / (N_THETA * refine)``, or over the
     case's ``theta_elements`` when it sets one."""
@@ -213,7 +233,7 @@ def _mesh_section(case, rep: str) -> RefMesh:
     x3 = None
     if rep == SOLID:
         extra = _breaks(case, rep)[2]
-        x3 = (_span_nodes(0.0, 2 * np.pi, extra, theta_step(case)) if case.body == RING
+        x3 = (_span_nodes(0.0, ring_span(case, rep), extra, theta_step(case)) if case.body == RING
               else _span_nodes(0.0, case.length, extra, swept.median_size(section)))
     mesh = mesh_from_points(swept.element_nodes(case, section, x3), lambda x: ~_in_cutouts(case, rep, x))
     counts = {"section": len(section.elements), **({"x3": len(x3) - 1} if x3 is not None else {}),

@@ -224,6 +224,10 @@ class Model:
             for end in (0.0, case.length):
                 facets = self._facets_where(lambda x, end=end: np.abs(x3_of(case, self.rep, x) - end) < 1e-9 * case.length)
                 fixed.append(self._dofs(facets, self.mesh_components((1, 2))))
+        if case.params.get("mirror"):
+            # the half ring 0 <= theta <= pi (reference_fem.mesh.ring_span): u_theta = u_y = 0 on its mirror planes
+            size = np.abs(self.rmesh.mesh.p).max()
+            fixed.append(self._dofs(self._facets_where(lambda x: np.abs(x[1]) < 1e-9 * size), [1]))
         if self.rep == AXISYMMETRIC:
             # regularity on the axis: no radial displacement at r = 0
             size = np.abs(self.rmesh.mesh.p).max()
