@@ -9,12 +9,11 @@ import math
 
 import numpy as np
 import pytest
+from test_mesh_sections_reference import relative, ring_case
 
 from cases import UnsupportedCase, get_case
 from cases.geometry import Probe
 from runs.registry import solve
-
-from test_mesh_sections_reference import relative, ring_case
 
 
 def test_the_mirror_half_of_the_layered_cylinder_gives_the_whole_ones_histories_with_half_the_unknowns():

@@ -107,10 +107,10 @@ def test_set_and_rebuild_work_on_a_file_scene():
 
 def test_params_defaults_cover_the_common_keys():
     # coarsen (an error estimate's companion), element and time_scheme (SMFEM's section element
-    # and time integration) and theta_elements (the 3D reference's count round a ring) are
+    # and time integration), theta_elements and mirror (the 3D reference's ring) are
     # overrides only: without a default, a case's params hold them only when set, and the
     # stored truths' keys stay as they were
-    overrides_only = {"coarsen", "element", "time_scheme", "theta_elements"}
+    overrides_only = {"coarsen", "element", "time_scheme", "theta_elements", "mirror"}
     assert set(REQUIRED) | set(OPTIONAL) == set(COMMON) - overrides_only and not set(REQUIRED) & set(OPTIONAL)
 
 
