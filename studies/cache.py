@@ -87,8 +87,9 @@ class Run:
     @property
     def label(self) -> str:
         """``r2 H40`` (refine, ``r1/2`` coarsened; harmonics where the solver has them), with ``dt`` when it is not
-        the case's default, the parameters its solver fixes besides ``dim`` (``quad9``) and a
-        time scheme other than Newmark's (``gauss``)."""
+        the case's default, the parameters its solver fixes besides ``dim`` (``quad9``), a
+        time scheme other than Newmark's (``gauss``) and the 3D reference's count round a ring
+        and mirror half (``N16 half``): two runs of a series never share a label."""
         p = self.summary["params"] if self.summary else self.job.build().params
         default_dt = get_case(self.job.case).params["dt"]
         coarse = f"/{p['coarsen']}" if p.get("coarsen", 1) != 1 else ""  # r1/2: half the paper mesh
@@ -96,6 +97,8 @@ class Run:
         text += f" dt{p['dt']:g}" if p.get("dt", default_dt) != default_dt else ""
         text += "".join(f" {v}" for _, v in lookup(self.job.solver).fixes)  # quad9
         text += f" {p['time_scheme']}" if p.get("time_scheme", "newmark") != "newmark" else ""  # gauss
+        text += f" N{p['theta_elements']}" if p.get("theta_elements") else ""  # elements round a 3D ring
+        text += " half" if p.get("mirror") else ""
         return text + "".join(f" {k}" if v is True else f" {k} {v}" for k, v in self.job.options)
 
     @property

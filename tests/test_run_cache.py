@@ -9,3 +9,14 @@ def test_the_code_version_covers_the_stress_point_table_and_leaves_out_presentat
     assert "cases/x3_points.csv" in cases  # SMFEM's stress points: a new table must rerun its runs
     assert "cases/x3_points.py" in cases and "runs/files.py" in runs
     assert not (cases | runs) & PRESENTATION
+
+
+def test_the_3d_references_count_round_and_mirror_half_are_in_a_runs_label():
+    """Two runs of one series must never share a label (the analysis keys its errors by it)."""
+    from runs.registry import REF3D
+    from studies.cache import Run
+    from studies.jobs import Job
+
+    labels = [Run(Job.make("flywheel", REF3D, level), "ok", "", None).label
+              for level in ({}, {"theta_elements": 16, "mirror": True}, {"theta_elements": 24, "mirror": True})]
+    assert labels == ["r1", "r1 N16 half", "r1 N24 half"]
