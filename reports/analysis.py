@@ -157,6 +157,10 @@ def _solver_summary(solver, runs, errors: pd.DataFrame, uncertainty: float, fami
         family_costs = {f: {t: metrics.cost_to(t, [], [], []) for t in targets} for f, (_, targets) in FAMILIES.items()}
         return SolverSummary(solver, status, refused.message if refused else "no runs planned",
                              pd.DataFrame(), [], costs, family_costs)
+    labels = [r.label for r in done]
+    if len(set(labels)) < len(labels):  # errors are keyed by label: two runs would share one's error
+        twice = next(lab for lab in labels if labels.count(lab) > 1)
+        raise ValueError(f"{solver}: two runs are labelled {twice!r}: studies.cache.Run.label must tell them apart")
     total, spatial = _measure(errors, solver, TOTAL), _measure(errors, solver, SPATIAL)
     others = {f: _measure(errors, solver, TOTAL, f) for f in FAMILIES}
     points = pd.DataFrame([{"label": r.label, "cpu": r.summary["cpu_time_s"], "dt": _dt(r),

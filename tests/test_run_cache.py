@@ -20,3 +20,19 @@ def test_the_3d_references_count_round_and_mirror_half_are_in_a_runs_label():
     labels = [Run(Job.make("flywheel", REF3D, level), "ok", "", None).label
               for level in ({}, {"theta_elements": 16, "mirror": True}, {"theta_elements": 24, "mirror": True})]
     assert labels == ["r1", "r1 N16 half", "r1 N24 half"]
+
+
+def test_two_runs_of_a_series_with_one_label_are_refused_not_confused():
+    import pandas as pd
+    import pytest
+
+    from reports.analysis import _solver_summary
+    from runs.registry import REF3D
+    from studies.cache import Run
+    from studies.jobs import Job
+
+    params = {"refine": 1, "dt": 1e-5}
+    runs = [Run(Job.make("flywheel", REF3D, {}), "ok", "", None, summary={"params": params, "cpu_time_s": c, "n_dof": 1})
+            for c in (1.0, 2.0)]
+    with pytest.raises(ValueError, match="two runs are labelled 'r1'"):
+        _solver_summary(REF3D, runs, pd.DataFrame(), 0.0, {})
