@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import shutil
 
 import numpy as np
 import pytest
@@ -51,3 +52,15 @@ def test_what_has_no_mirror_half_is_refused_in_one_line():
         assert "\n" not in str(err.value)
     assert np.isfinite(solve("reference-3d", dataclasses.replace(cylinder, params={**cylinder.params, "t_end": 4e-5}))
                        .history["A_ur"]).all()
+
+
+@pytest.mark.skipif(shutil.which("ccx") is None, reason="CalculiX (ccx) is not installed")
+def test_calculix_takes_the_mirror_half_from_the_references_supports():
+    """The deck's *BOUNDARY lines are the reference's fixed dofs, the mirror planes' too: the half
+    gives the whole's histories (to ccx's printed digits) with half the elements."""
+    base = {"dim": 3, "t_end": 2e-4}
+    whole = solve("calculix", get_case("thick_cylinder", base))
+    half = solve("calculix", get_case("thick_cylinder", {**base, "mirror": True}))
+    assert half.info["n_elements"] * 2 == whole.info["n_elements"]
+    for name in ("A_ur", "B_ut", "C_ur"):
+        assert relative(half.history[name], whole.history[name]) < 1e-5, name
