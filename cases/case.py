@@ -66,6 +66,13 @@ class Case:
         if any(r.material.law != self.material.law for r in self.regions):
             raise ValueError(f"{self.name}: every region's material must follow the same law "
                              f"({self.material.law}): all elastic or all plastic")
+        surfaces = getattr(self.section, "regions", None) or {}  # a mesh section's physical surfaces
+        missing = next((r.name for r in self.regions if r.s_range is None and r.name not in surfaces), None)
+        if missing is not None:
+            from .params import UnsupportedCase
+
+            raise UnsupportedCase(f"{self.name}: region {missing!r} names a physical surface, which this section "
+                                  f"has not (a mapped block has none: give the region s_range and t_range)")
 
     def variation_factor(self, x3):
         """``1 + sum a cos(m k x3)`` at ``x3`` (1 without a variation)."""
@@ -109,24 +116,18 @@ class Case:
         """The section's materials: ``material`` (index 0), then each region's."""
         return (self.material,) + tuple(r.material for r in self.regions)
 
-    def material_index(self, st=None, region_elements: dict | None = None, n: int | None = None):
-        """Index into :attr:`materials` of each of ``n`` elements: by the parametric centres
-        ``st`` (n, 2) for box regions, by ``region_elements`` (physical surface name -> element
-        ids, a mesh section's) for named ones; 0 outside every region."""
+    def material_index(self, st, region_elements: dict | None = None):
+        """Index into :attr:`materials` of each element: by the parametric centres ``st`` (n, 2)
+        for box regions, by ``region_elements`` (physical surface name -> element ids, a mesh
+        section's) for named ones; 0 outside every region."""
         import numpy as np
 
-        n = len(st) if st is not None else n
-        index = np.zeros(n, int)
+        index = np.zeros(len(st), int)
         for k, r in enumerate(self.regions, start=1):
             if r.s_range is not None:
                 index[r.contains(st[:, 0], st[:, 1])] = k
-            elif r.name in (region_elements or {}):
+            else:  # a physical surface the section has (__post_init__)
                 index[np.asarray(region_elements[r.name], int)] = k
-            else:
-                from .params import UnsupportedCase
-
-                raise UnsupportedCase(f"{self.name}: region {r.name!r} names a physical surface, which this section "
-                                      f"has not (a mapped block has none: give the region s_range and t_range)")
         return index
 
     @property

@@ -36,8 +36,6 @@ def element_index(case, s: np.ndarray, t: np.ndarray) -> np.ndarray:
         sec = case.section
         parent = sec.locate(np.asarray(s, float), np.asarray(t, float))[0]
         return case.material_index(st=sec.x[sec.elements[:, 8]], region_elements=sec.regions)[parent]
-    if any(r.s_range is None for r in case.regions):
-        case.material_index(n=np.size(s))  # a physical surface named on a block: refused there, in one line
     st = []
     for values, axis, which in ((s, case.section.s, "s_range"), (t, case.section.t, "t_range")):
         values = np.asarray(values, float)

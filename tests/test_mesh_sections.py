@@ -187,7 +187,7 @@ def test_the_l_is_unstructured_non_convex_and_its_motion_vanishes_on_its_edges(l
         assert {3, 5} <= interior_valences(section) and set(section.regions) == {"leg", "foot"}
         mesh = section.mesh(2)
         case = verification_mesh.build(body, section, EXACT_IN_TIME)
-        index = case.material_index(region_elements=mesh.regions, n=mesh.n_elements)
+        index = case.material_index(mesh.element_st_centres(), region_elements=mesh.regions)
         assert set(index.tolist()) == {1, 2}
         on_edges = np.unique(np.concatenate([mesh.edge_nodes(name) for name in ("outer", "notch")]))
         x1, x2, x3 = case.probes[0].point
