@@ -156,17 +156,77 @@ class Region:
 
 
 @dataclass(frozen=True)
+class Amplitude:
+    """A load's history in time: the factor through the points ``(t, factor)``, linear between
+    them and constant before the first and after the last (the CalculiX/Abaqus ``*AMPLITUDE``
+    convention). A load without one is a step: on at t = 0 and held."""
+
+    points: tuple[tuple[float, float], ...]
+
+    def __post_init__(self):
+        t = [p[0] for p in self.points]
+        if len(self.points) < 2 or any(len(p) != 2 for p in self.points):
+            raise ValueError("an amplitude needs at least two (t, factor) points")
+        if not np.isfinite(np.asarray(self.points, float)).all():
+            raise ValueError("an amplitude's times and factors must be finite numbers")
+        if any(b <= a for a, b in zip(t, t[1:])):
+            raise ValueError("an amplitude's times must increase strictly")
+
+    def __call__(self, t):
+        """The factor at ``t`` (a number or an array)."""
+        times, factors = zip(*self.points)
+        value = np.interp(t, times, factors)
+        return float(value) if np.ndim(value) == 0 else value
+
+    @property
+    def times(self) -> tuple[float, ...]:
+        """Where the factor's slope may change."""
+        return tuple(p[0] for p in self.points)
+
+
+@dataclass(frozen=True)
 class Pressure:
     """Pressure (compression positive) normal to the undeformed surface ``edge``.
 
     Along x3 it is ``q`` on ``x3_intervals`` and zero elsewhere; with ``mode = l`` it is instead
     the single Fourier term ``q psi_l(x3)`` (ring: cos(l x3); prism: sin(l pi x3 / length)).
+    ``amplitude`` scales it in time (:class:`Amplitude`; none: a step). With ``speed`` (rad/s on
+    a ring, m/s on a prism) the intervals move along x3: at time t each one covers
+    ``[a + speed t, b + speed t]``, clipped to ``[0, length]`` on a prism (so a patch may start
+    outside the body and enter it) and taken modulo 2 pi on a ring (:meth:`intervals_at`).
     """
 
     q: float
     edge: str
     x3_intervals: tuple[tuple[float, float], ...] = ()
     mode: int | None = None
+    amplitude: Amplitude | None = None
+    speed: float = 0.0
+
+    @property
+    def moving(self) -> bool:
+        return self.speed != 0.0
+
+    @property
+    def timed(self) -> bool:
+        """Whether the load is anything but a step held in place."""
+        return self.moving or self.amplitude is not None
+
+    def intervals_at(self, t: float, body: str, length: float) -> tuple[tuple[float, float], ...]:
+        """The x3 intervals the pressure covers at time ``t`` (empty ones left out)."""
+        shift = self.speed * t
+        if body == RING:  # the basis functions are periodic: a shifted interval needs no wrapping
+            return tuple((a + shift, b + shift) for a, b in self.x3_intervals)
+        out = ((min(max(a + shift, 0.0), length), min(max(b + shift, 0.0), length)) for a, b in self.x3_intervals)
+        return tuple((a, b) for a, b in out if b > a)
+
+    def times_of_change(self, body: str, length: float, t_end: float) -> tuple[float, ...]:
+        """The times in (0, t_end) at which the load's history has a kink: its amplitude's points,
+        and on a prism where a moving interval's end meets the body's end."""
+        times = set(self.amplitude.times if self.amplitude is not None else ())
+        if self.moving and body == PRISM:
+            times |= {(x - e) / self.speed for a, b in self.x3_intervals for e in (a, b) for x in (0.0, length)}
+        return tuple(sorted(t for t in times if 0.0 < t < t_end))
 
 
 @dataclass(frozen=True)
@@ -177,11 +237,12 @@ class Force:
     :mod:`cases.manufactured` expressions of ``x1, x2, x3``), ``time`` an expression of ``t``.
     A case sums its terms: a manufactured motion ``U(x) T(t)`` needs two body forces, ``rho U``
     times ``T''`` and ``-div sigma(U)`` times ``T``, and on a free edge the traction
-    ``sigma(U) n`` times ``T``."""
+    ``sigma(U) n`` times ``T``. ``amplitude`` (:class:`Amplitude`) multiplies ``time``."""
 
     pattern: tuple[str, str, str]
     time: str = "1"
     edge: str | None = None
+    amplitude: Amplitude | None = None
 
 
 @dataclass(frozen=True)

@@ -21,9 +21,9 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from . import dome, flywheel, layered_cylinder, notched_cylinder, notched_strip, rod_impact, thick_cylinder
+from . import dome, flywheel, layered_cylinder, moving_load, notched_cylinder, notched_strip, rod_impact, thick_cylinder
 from .case import Case
-from .geometry import (EDGES, PRISM, RING, UNIFORM_SHIFTS, Axis, Cutout, Force, InitialVelocity, Pressure, Probe,
+from .geometry import (EDGES, PRISM, RING, UNIFORM_SHIFTS, Amplitude, Axis, Cutout, Force, InitialVelocity, Pressure, Probe,
                        Region, Section, Support, Wall)
 from .material import Material
 from .params import COMMON, MAX_STRESS, ParameterError, Spec, UnsupportedCase, failure, validate
@@ -32,7 +32,7 @@ from .params import COMMON, MAX_STRESS, ParameterError, Spec, UnsupportedCase, f
 def _scene_keys() -> dict[str, Spec]:
     """The built-in scenes' own keys (q, contrast, notch_depth, v0, gap, ...) with their ranges."""
     keys: dict[str, Spec] = {}
-    for module in (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact, layered_cylinder, flywheel):
+    for module in (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact, layered_cylinder, flywheel, moving_load):
         keys.update({k: spec for k, spec in module.SPECS.items() if k not in COMMON and k not in keys})
     return keys
 
@@ -54,6 +54,8 @@ PROBE_KEYS = ("name", "kind", "field", "component", "point", "edge")
 #: probe kind -> the fields it may record
 PROBE_FIELDS = {"point": ("u", "v", "sigma", "peps"), "max": ("peps",), "edge_mean": ("sigma",),
                 "body_mean": ("u", "v")}
+#: the fastest a load may move along x3 (m/s on a prism, rad/s on a ring)
+MAX_SPEED = 1e8
 #: most elements in one segment of a section axis (before ``refine``)
 MAX_COUNT = 10_000
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
@@ -243,9 +245,11 @@ class _Scene:
         if E_T >= p["E"]:
             material.fail("E_T", f"{E_T!r} is out of range: the tangent modulus must be below E={p['E']:g}")
         variation = self.read_variation(material)
-        loads = tuple(self.read_load(t) for t in top.tables("load", ("q", "edge", "x3_intervals", "mode")))
-        forces = tuple(self.read_force(t) for t in top.tables("body_force", ("pattern", "time"))) + \
-            tuple(self.read_force(t, self.edge(t, "edge")) for t in top.tables("traction", ("edge", "pattern", "time")))
+        loads = tuple(self.read_load(t) for t in top.tables("load", ("q", "edge", "x3_intervals", "mode", "amplitude",
+                                                                    "speed")))
+        forces = tuple(self.read_force(t) for t in top.tables("body_force", ("pattern", "time", "amplitude"))) + \
+            tuple(self.read_force(t, self.edge(t, "edge")) for t in top.tables("traction", ("edge", "pattern", "time",
+                                                                                           "amplitude")))
         cutouts = tuple(self.read_cutout(t) for t in top.tables("cutout", ("s_range", "t_range", "x3_intervals")))
         regions = self.read_regions(top.tables("region", REGION_KEYS))
         wall = self.read_wall(top.table("wall", ("edge", "gap", "friction", "slope"))) if features["wall"] else None
@@ -387,12 +391,15 @@ class _Scene:
         names = tuple(self.section.edges) + parametric + (("all",) if allow_all else ())
         return t.string(key, choices=names)
 
-    def intervals(self, t: _Table, key: str) -> tuple[tuple[float, float], ...]:
+    def intervals(self, t: _Table, key: str, moving: bool = False) -> tuple[tuple[float, float], ...]:
         """Intervals along x3 inside the body (prism: [0, length]; ring: [-2 pi, 2 pi], at most
-        once round), none overlapping."""
+        once round), none overlapping; a moving load's prism intervals may start outside the
+        body (a patch that enters it)."""
         pairs = t.array(key)
         lo, hi, text = (0.0, self.length, f"[0, length = {self.length:g}]") if self.body == PRISM else \
             (-TWO_PI, TWO_PI, "[-2 pi, 2 pi] (radians)")
+        if moving and self.body == PRISM:
+            lo, hi, text = -math.inf, math.inf, "(-inf, inf) (a moving load's)"
         out = []
         for pair in pairs:
             if not isinstance(pair, list) or len(pair) != 2:
@@ -416,7 +423,25 @@ class _Scene:
             t.fail("x3_intervals", "give either x3_intervals (where along x3 the pressure acts) or mode (one "
                                    "Fourier term), " + ("not both" if t.has("mode") else "missing both"))
         mode = t.integer("mode", 0 if self.body == RING else 1, 2000, None)
-        return Pressure(q, edge, () if mode is not None else self.intervals(t, "x3_intervals"), mode)
+        speed = t.number("speed", 0.0, lo=-MAX_SPEED, hi=MAX_SPEED)
+        if speed and mode is not None:
+            t.fail("speed", "a single Fourier term (mode) cannot move: give x3_intervals for a moving patch")
+        intervals = () if mode is not None else self.intervals(t, "x3_intervals", moving=bool(speed))
+        return Pressure(q, edge, intervals, mode, self.amplitude(t), speed)
+
+    def amplitude(self, t: _Table) -> Amplitude | None:
+        """``amplitude = [[t, factor], ...]``: the load's factor in time, linear between the points
+        and constant after the last (none: a step held from t = 0)."""
+        if not t.has("amplitude"):
+            return None
+        points = t.array("amplitude")
+        if not all(isinstance(p, list) and len(p) == 2 for p in points):
+            t.fail("amplitude", "give [t, factor] pairs, e.g. [[0, 0], [2e-4, 1], [6e-4, 0]]")
+        pairs = tuple((t.to_number("amplitude", a), t.to_number("amplitude", b)) for a, b in points)
+        try:
+            return Amplitude(pairs)
+        except ValueError as exc:
+            t.fail("amplitude", f"{[list(p) for p in pairs]!r}: {exc}")
 
     def read_force(self, t: _Table, edge: str | None = None) -> Force:
         """``pattern``: three expressions of x1, x2, x3 (the force per unit volume, or with
@@ -440,7 +465,7 @@ class _Scene:
                 except expressions.ExpressionError as exc:
                     t.fail(key, f"{_excerpt(text)} is not an expression: {exc}")
         self.check_finite(t, pattern, time)
-        return Force(tuple(pattern), time, edge)
+        return Force(tuple(pattern), time, edge, self.amplitude(t))
 
     def check_finite(self, t: _Table, pattern, time: str) -> None:
         """Refuse a force no solver could apply, before any run: a pattern that is not finite
@@ -570,6 +595,9 @@ class _Scene:
         symmetric, axisymmetric = top.boolean("symmetric", False), top.boolean("axisymmetric", False)
         pieces = [(f"load[{i}]", x.mode, x.x3_intervals) for i, x in enumerate(loads, 1)] + \
                  [(f"cutout[{i}]", None, x.x3_intervals) for i, x in enumerate(cutouts, 1) if x is not None]
+        for i, load in enumerate(loads, 1):
+            if symmetric and load.moving:
+                top.fail("symmetric", f"true, but load[{i}] moves along x3 (set symmetric = false)")
         for where, mode, intervals in pieces:
             circle = _on_circle(intervals)
             if axisymmetric and not (mode == 0 or _same(circle, [(0.0, TWO_PI)])):

@@ -171,7 +171,7 @@ class _Wall:
         return du
 
 
-def march(system: ExplicitSystem, Q: np.ndarray, v0: np.ndarray, dt: float, n_steps: int
+def march(system: ExplicitSystem, Q, v0: np.ndarray, dt: float, n_steps: int
           ) -> Iterator[tuple[int, float, np.ndarray, np.ndarray, np.ndarray]]:
     """Yield ``(n, t_n, u_n, v_n, a_n)`` for n = 0 .. ``n_steps`` (free dofs; from rest in
     displacement, at velocity ``v0``). ``a_n`` includes the wall's force, known only once
@@ -179,8 +179,9 @@ def march(system: ExplicitSystem, Q: np.ndarray, v0: np.ndarray, dt: float, n_st
     initial acceleration ``M a_0 = Q - f_int(u_0)`` (the initial state every solver reports:
     the wall's force acts from the first step on)."""
     u = np.zeros_like(v0)
+    load = Q if callable(Q) else (lambda t: Q)
     for n in range(n_steps + 1):
-        a = (Q - system.internal_forces(u)) / system.m
+        a = (load(n * dt) - system.internal_forces(u)) / system.m
         if n == 0:  # the first half step: u_1 = u_0 + dt v_0 + dt^2 / 2 a_0
             u_new = u + dt * v0 + 0.5 * dt * dt * a
             du = system.constrain(u_new)
@@ -230,7 +231,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     ``'safety'``, ``'grading'``, ``'bbar'``, the mesh's ``'counts'`` and ``'n_elements'``,
     ``'cpu_mesh_s'``; with a wall ``'contact_nodes'``.
     """
-    from .solver import output_mesh
+    from .solver import load_history, output_mesh
 
     if step_divisor < 1:
         raise ValueError("step_divisor must be a positive integer")
@@ -253,7 +254,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     u_full, v_full, a_full = (np.zeros(model.basis.N) for _ in range(3))
     v0 = model.initial_velocity()[free]
     values, frames, j = {}, [], 0
-    for n, t, u, v, a in march(system, model.Q[free], v0, dt, int(before[-1] + (theta[-1] > 0))):
+    for n, t, u, v, a in march(system, load_history(model), v0, dt, int(before[-1] + (theta[-1] > 0))):
         if n not in wanted:
             continue
         if not (np.isfinite(u).all() and np.isfinite(v).all()):

@@ -82,6 +82,9 @@ class Model:
         if (case.variation or case.forces) and (case.material.plastic or case.wall is not None):
             raise UnsupportedCase("reference solver: body forces and a varying material are elastic and without "
                                   "a wall so far")
+        if case.wall is not None and any(load.timed for load in case.loads):
+            raise UnsupportedCase("reference solver: with a wall, loads are steps held in place (no amplitude, "
+                                  "no moving load) so far")
         #: E and rho's variation along x3 at the quadrature points (n_qp,), or None
         self.factor = case.variation_factor(x3_of(case, self.rep, self.x_qp)) if case.variation else None
         factor = None if self.factor is None else self.factor.reshape(self.basis.dx.shape)
@@ -93,8 +96,10 @@ class Model:
             self.M = redistributed_mass(self.M, self.basis, self.edge_facets(case.wall.edge), rho, axisym,
                                         INTORDER)
         self.Q = self._load_vector()
-        #: ``(time function, load vector)`` per body-force term of the case
-        self.force_terms = [self._force_vector(term) for term in case.forces]
+        #: the loads that vary in time (force terms, then pressures with an amplitude or moving)
+        #: as callables ``t -> nodal forces`` (full dofs)
+        self.timed_terms = [self._timed(*self._force_vector(term)) for term in case.forces] + \
+            [self._timed_pressure(load) for load in case.loads if load.timed]
         self.fixed = self._fixed_dofs()
         if fix_rigid_body and case.body == RING and self.rep != AXISYMMETRIC:
             self.fixed = np.union1d(self.fixed, self._rigid_body_dofs())
@@ -148,9 +153,10 @@ class Model:
             raise UnsupportedCase("reference solver: a load that is not axisymmetric needs dim=3")
         return facets
 
-    def _load_vector(self) -> np.ndarray:
+    def _load_vector(self, loads=None) -> np.ndarray:
+        """The nodal forces of ``loads`` (default: the case's pressures held from t = 0)."""
         Q = np.zeros(self.basis.N)
-        for load in self.case.loads:
+        for load in [x for x in self.case.loads if not x.timed] if loads is None else loads:
             facets = self.load_facets(load)
             fb = FacetBasis(self.rmesh.mesh, self.element, facets=facets, intorder=INTORDER)
             x = np.asarray(fb.global_coordinates())
@@ -158,11 +164,28 @@ class Model:
             Q += asm(forms.pressure, fb, q=load.q, weight=weight)
         return Q
 
+    @staticmethod
+    def _timed(g, F: np.ndarray):
+        return lambda t: float(g(t)) * F
+
+    def _timed_pressure(self, load):
+        """``t -> nodal forces`` of a pressure with an amplitude or moving along x3."""
+        from cases.histories import time_factor
+
+        g = time_factor(load)
+        if not load.moving:
+            return self._timed(g, self._load_vector((load,)))
+        from .moving import MovingPressure
+
+        unit = MovingPressure(self, load)
+        return lambda t: (load.q * float(g(t))) * unit(t)
+
     def _force_vector(self, term):
         """A force term's time function and load vector: its pattern at the quadrature points of
         the elements (a body force) or of the edge's boundary facets (a traction), in body
         coordinates and components, turned into the mesh frame."""
-        from cases.manufactured import numeric, time_function
+        from cases.histories import time_factor
+        from cases.manufactured import numeric
 
         basis = self.basis if term.edge is None else FacetBasis(
             self.rmesh.mesh, self.element, facets=self.edge_facets(term.edge), intorder=INTORDER)
@@ -176,7 +199,7 @@ class Model:
         R = body_rotation(self.case, self.rep, x_qp)  # mesh frame -> body, (n_qp, 3, 3)
         f_mesh = np.einsum("nji,jn->in", R, f_body)[: self.dim].reshape((self.dim,) + shape)
         r = points[0] if self.rep == AXISYMMETRIC else np.ones(shape)
-        return time_function(term.time), asm(forms.body_force, basis, b=f_mesh, weight=r)
+        return time_factor(term), asm(forms.body_force, basis, b=f_mesh, weight=r)
 
     def mesh_components(self, components) -> list[int]:
         """Mesh-frame displacement components (0-based) of body ``components`` (1-based).

@@ -30,13 +30,12 @@ def _system(model: Model, c: float):
 
 
 def load_history(model):
-    """The free dofs' load: the pressures' vector, held from t = 0, or with body-force terms
-    the function ``Q(t)``."""
-    Q = model.Q[model.free]
-    if not model.force_terms:
+    """The free dofs' load: the pressures' vector, held from t = 0, or with loads that vary in
+    time (force terms, amplitudes, moving pressures) the function ``Q(t)``."""
+    Q, free = model.Q[model.free], model.free
+    if not model.timed_terms:
         return Q
-    terms = [(g, F[model.free]) for g, F in model.force_terms]
-    return lambda t: Q + sum(g(t) * F for g, F in terms)
+    return lambda t: Q + sum(term(t)[free] for term in model.timed_terms)
 
 
 def solve(case, progress: Callable[[int, int], None] | None = None, every: int = 0,
@@ -129,6 +128,8 @@ def static(case, factors=(1.0,)) -> tuple[Model, list[np.ndarray], list[int], ob
     if case.wall is not None:
         raise UnsupportedCase("reference solver: contact is transient only (a free body has no static state)")
     model = Model(case, fix_rigid_body=True)
+    if model.timed_terms:
+        raise UnsupportedCase("reference solver: a static solve takes loads held in place; this case's vary in time")
     system = _system(model, 0.0)
     u = np.zeros(model.free.size)
     out, iterations = [], []

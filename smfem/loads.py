@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from cases.geometry import PRISM, RING, interval_fourier
@@ -38,15 +40,70 @@ def pressure_x3_amplitude(load, mode: Mode, body: str, length: float) -> float:
 
 
 def load_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode, np.ndarray]:
-    """Full nodal load amplitude (3 n_nodes,) of every mode."""
-    shapes = {load.edge: edge_pressure_vector(mesh, load.edge, case.body) for load in case.loads}
+    """Full nodal load amplitude (3 n_nodes,) of every mode of the pressures held from t = 0
+    (those without an amplitude that stay in place; the others are :func:`timed_loads`)."""
+    held = [load for load in case.loads if not load.timed]
+    shapes = {load.edge: edge_pressure_vector(mesh, load.edge, case.body) for load in held}
     out = {}
     for mode in modes:
         Q = np.zeros(3 * mesh.n_nodes)
-        for load in case.loads:
+        for load in held:
             Q += pressure_x3_amplitude(load, mode, case.body, case.length) * shapes[load.edge]
         out[mode] = Q
     return out
+
+
+class TimedLoad:
+    """A load whose share of each mode varies in time: ``factors(t)[i] * shapes[modes[i]]``.
+
+    A force term or a pressure with an amplitude keeps its place: one factor, ``g(t)``, for
+    every mode. A moving pressure's share of mode m is ``g(t) int q psi1_m`` over the intervals
+    it covers at t, exact (:func:`cases.geometry.interval_fourier`), with ``shapes`` the unit
+    pressure's nodal vector.
+    """
+
+    def __init__(self, shapes: dict[Mode, np.ndarray], factor, pressure=None, body: str = "", length: float = 0.0):
+        self.shapes, self.factor, self.pressure, self.body, self.length = shapes, factor, pressure, body, length
+
+    def factors(self, t: float, modes: list[Mode]) -> np.ndarray:
+        g = float(self.factor(t))
+        if self.pressure is None:
+            return np.full(len(modes), g)
+        covered = self.pressure.intervals_at(t, self.body, self.length)
+        moved = dataclasses.replace(self.pressure, x3_intervals=covered)
+        return g * np.array([pressure_x3_amplitude(moved, m, self.body, self.length) for m in modes])
+
+    def largest(self, modes: list[Mode], times: np.ndarray) -> np.ndarray:
+        """Per mode, the largest magnitude of its load at ``times`` (which modes a load reaches)."""
+        peak = np.abs(np.array([self.factors(t, modes) for t in times])).max(axis=0)
+        return peak * np.array([np.abs(self.shapes[m]).max() for m in modes])
+
+
+def timed_loads(case, mesh: SectionMesh, modes: list[Mode], element: Element) -> list[TimedLoad]:
+    """The case's force terms, then its timed pressures, as :class:`TimedLoad`."""
+    from cases.histories import time_factor
+
+    out = [TimedLoad(amps, time_factor(term)) for term, amps in zip(case.forces, force_amplitudes(case, mesh, modes, element))]
+    for load in case.loads:
+        if not load.timed:
+            continue
+        shape = edge_pressure_vector(mesh, load.edge, case.body)
+        if load.moving:
+            out.append(TimedLoad({m: shape for m in modes}, time_factor(load), load, case.body, case.length))
+        else:
+            out.append(TimedLoad({m: pressure_x3_amplitude(load, m, case.body, case.length) * shape for m in modes},
+                                 time_factor(load)))
+    return out
+
+
+def sample_times(case) -> np.ndarray:
+    """Times over the window at which a timed load is looked at to find the modes it reaches:
+    evenly spaced, the loads' kinks and each side of them."""
+    times = set(np.linspace(0.0, case.t_end, 513).tolist())
+    for load in case.loads:
+        for t in load.times_of_change(case.body, case.length, case.t_end):
+            times |= {t, t * (1 - 1e-6), t * (1 + 1e-6)}
+    return np.array(sorted(times))
 
 
 def velocity_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode, np.ndarray]:

@@ -34,8 +34,8 @@ class ModelError(UnsupportedCase):
 @dataclass
 class ModeSystem:
     """One mode: map ``T`` (full <- reduced), diagonal block ``K``, lumped ``M`` diagonal, load
-    ``Q`` and initial velocity ``V0`` (reduced); ``Q_terms``: the amplitude of each of the
-    case's body-force terms (reduced), which the time function of that term scales."""
+    ``Q`` and initial velocity ``V0`` (reduced); ``Q_terms``: the nodal vector of each of the
+    model's timed loads (reduced), which that load's factor for this mode scales."""
 
     mode: fourier.Mode
     T: sp.csr_matrix
@@ -91,9 +91,12 @@ class Model:
         candidates = fourier.modes(case.body, n_harm, families)
         Q = loads.load_amplitudes(case, self.mesh, candidates)
         V = loads.velocity_amplitudes(case, self.mesh, candidates)
-        terms = loads.force_amplitudes(case, self.mesh, candidates, self.element)
-        size = {m: max([np.abs(Q[m]).max(), np.abs(V[m]).max()] + [np.abs(F[m]).max() for F in terms])
-                for m in candidates}
+        #: the force terms, then the pressures that vary in time or move (:class:`smfem.loads.TimedLoad`)
+        self.timed = loads.timed_loads(case, self.mesh, candidates, self.element)
+        times = loads.sample_times(case)
+        reach = [term.largest(candidates, times) for term in self.timed]
+        size = {m: max([np.abs(Q[m]).max(), np.abs(V[m]).max()] + [r[i] for r in reach])
+                for i, m in enumerate(candidates)}
         scale = max(size.values())
         if scale == 0.0:
             raise ModelError(f"{case.name}: no load and no initial velocity: nothing moves")
@@ -138,7 +141,7 @@ class Model:
         for i, (mode, T) in enumerate(zip(self.modes, self._maps)):
             K, M = self.reduced_blocks(i)
             self.systems.append(ModeSystem(mode, T, K, M, T.T @ Q[mode], self._project(T, V[mode]),
-                                           tuple(T.T @ F[mode] for F in terms)))
+                                           tuple(T.T @ term.shapes[mode] for term in self.timed)))
         self.offsets = np.cumsum([0] + [s.T.shape[1] for s in self.systems])
         self.coupled_mass = self._coupled_mass()
 

@@ -79,14 +79,15 @@ def march(system, u0: np.ndarray, v0: np.ndarray, dt: float, n_steps: int) -> It
 
 
 class Load:
-    """A load history ``Q + sum g_k(t) Q_k``: the pressures' ``Q``, held from t = 0, and the
-    force terms ``(g_k, Q_k)`` (their time functions and amplitudes, all modes stacked)."""
+    """A load history ``Q + sum Q_k(t)``: the pressures' ``Q``, held from t = 0, and the timed
+    loads ``Q_k(t)`` (callables: force terms, pressures with an amplitude or moving; all modes
+    stacked, :func:`smfem.solver.force_terms`)."""
 
     def __init__(self, Q: np.ndarray, terms=()):
         self.Q, self.terms = Q, tuple(terms)
 
     def __call__(self, t: float) -> np.ndarray:
-        return self.Q + sum(float(g(t)) * Qk for g, Qk in self.terms) if self.terms else self.Q
+        return self.Q + sum(term(t) for term in self.terms) if self.terms else self.Q
 
 
 class LinearSystem:
@@ -98,7 +99,7 @@ class LinearSystem:
     M : (n,) lumped mass diagonal, or (n, n) sparse mass where harmonics couple through rho(lm)
     Q : (n,) load held from t = 0
     dt : time step, s
-    terms : ``(g, Q_k)`` pairs, loads ``g(t) Q_k`` added to ``Q`` (body forces varying in time)
+    terms : callables ``t -> Q_k(t)`` added to ``Q`` (loads varying in time, :class:`Load`)
     """
 
     def __init__(self, K: sp.spmatrix, M, Q: np.ndarray, dt: float, terms=()):

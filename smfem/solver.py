@@ -56,11 +56,22 @@ def stacked(model: Model):
 
 
 def force_terms(case, model: Model) -> list:
-    """``(g, Q_k)`` per body-force term: its time function and its amplitudes, all modes stacked."""
-    from cases.manufactured import time_function
+    """The model's timed loads (force terms, pressures with an amplitude or moving) as callables
+    ``t -> Q_k(t)``, all modes stacked (:class:`smfem.newmark.Load`)."""
+    return [_stacked_term(model, k, term) for k, term in enumerate(model.timed)]
 
-    return [(time_function(term.time), np.concatenate([s.Q_terms[k] for s in model.systems]))
-            for k, term in enumerate(case.forces)]
+
+def _stacked_term(model: Model, k: int, term):
+    """``t -> S @ factors(t)``: column i of ``S`` is mode i's reduced vector in its own rows."""
+    blocks = [s.Q_terms[k] for s in model.systems]
+    if term.pressure is None:  # one factor for every mode
+        Q = np.concatenate(blocks)
+        return lambda t: float(term.factor(t)) * Q
+    rows = np.concatenate([np.arange(a, b) for a, b in zip(model.offsets[:-1], model.offsets[1:])])
+    cols = np.repeat(np.arange(len(blocks)), np.diff(model.offsets))
+    S = sp.csr_matrix((np.concatenate(blocks), (rows, cols)), shape=(int(model.offsets[-1]), len(blocks)))
+    S.eliminate_zeros()
+    return lambda t: S @ term.factors(t, model.modes)
 
 
 def solve(case, options: SolverOptions | None = None, progress=None, with_fields: bool = True,
@@ -89,8 +100,9 @@ def build_system(case, options: SolverOptions):
     if case.wall is not None:
         if plastic:
             raise ModelError(f"{case.name}: contact with plasticity is not supported: set plastic=false")
-        if case.forces:
-            raise ModelError(f"{case.name}: body forces with a wall are not supported")
+        if case.forces or any(load.timed for load in case.loads):
+            raise ModelError(f"{case.name}: with a wall, loads are steps held in place: body forces, amplitudes "
+                             "and moving loads are not supported")
         # harmonic 0 alone for an axisymmetric scene, else every mode the wall's symmetry allows
         model = Model(case, nonlinear=not case.axisymmetric)
         return model, ContactSystem(model, case.dt, options), ContactSystem.HOW

@@ -8,6 +8,8 @@ modes of a nonlinear run follow from that symmetry, not from the load alone:
 Force terms (body forces, tractions) and a material varying along x3 are tried under the same
 maps at sample points (:func:`forces_invariant`).
 A tilted wall (``case.wall.slope``) gives a contact gap varying as cos(x3): the cosine family.
+A moving load counts by every place along its path: one turning round a ring excites both
+families.
 """
 
 from __future__ import annotations
@@ -31,18 +33,23 @@ def x3_pattern(case, x3: np.ndarray) -> np.ndarray:
             k = load.mode if case.body == RING else load.mode * math.pi / case.length
             out += next(weights) * (np.cos(k * x3) if case.body == RING else np.sin(k * x3))
             continue
-        inside = np.zeros_like(x3, bool)
-        for a, b in load.x3_intervals:
-            inside |= ((x3 - a) % period < (b - a)) if case.body == RING else ((x3 > a) & (x3 < b))
-        out += next(weights) * inside
+        # a moving load by its place at several times, each with its own weight: the pattern
+        # keeps a symmetry only if every place along the path keeps it
+        for t in np.linspace(0.0, case.t_end, 17) if load.moving else (0.0,):
+            out += next(weights) * _inside(x3, load.intervals_at(t, case.body, case.length), case.body, period)
     for cut in case.cutouts:
-        inside = np.zeros_like(x3, bool)
-        for a, b in cut.x3_intervals:
-            inside |= ((x3 - a) % period < (b - a)) if case.body == RING else ((x3 > a) & (x3 < b))
-        out += next(weights) * inside
+        out += next(weights) * _inside(x3, cut.x3_intervals, case.body, period)
     if case.wall is not None and case.wall.slope:
         out += next(weights) * np.cos(x3)  # the gap of a tilted wall varies as r cos(x3)
     return out
+
+
+def _inside(x3: np.ndarray, intervals, body: str, period: float) -> np.ndarray:
+    """Mask of the points ``x3`` inside ``intervals`` (a ring's modulo 2 pi)."""
+    inside = np.zeros_like(x3, bool)
+    for a, b in intervals:
+        inside |= ((x3 - a) % period < (b - a)) if body == RING else ((x3 > a) & (x3 < b))
+    return inside
 
 
 def forces_invariant(case, x3_image, signs=(1.0, 1.0, 1.0)) -> bool:

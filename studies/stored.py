@@ -38,6 +38,11 @@ def case_definition(case) -> dict:
     for name in ("forces", "variation", "exact", "regions"):  # features a scene may leave out: absent, as before they existed
         if not d.get(name):
             d.pop(name, None)
+    for load in [*d["loads"], *d.get("forces", ())]:  # a step held in place: as before loads had a history
+        if load.get("amplitude") is None:
+            load.pop("amplitude", None)
+        if not load.get("speed"):
+            load.pop("speed", None)
     return d
 
 

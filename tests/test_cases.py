@@ -18,6 +18,7 @@ PROBES = {
     "rod_impact": ["mid_szz", "contact_p", "end_uz", "rod_vz"],
     "layered_cylinder": ["A_ur", "B_ut", "C_ur", "I_ur"],
     "flywheel": ["rim_uz_0", "rim_uz_90", "rim_uz_180"],
+    "moving_load": ["mid_uz", "q_uz"],
 }
 
 

@@ -25,7 +25,7 @@ def oscillator_error(mass, n_steps: int) -> float:
     2 omega^2 u = 2 (1 + cos t)`` from ``u = 0, v = 1`` (``mass``: 2 as a diagonal or a sparse
     matrix), against the exact solution."""
     dt = T_END / n_steps
-    system = GaussSystem(sp.csr_matrix([[2 * OMEGA**2]]), mass, np.array([2.0]), dt, [(np.cos, np.array([2.0]))])
+    system = GaussSystem(sp.csr_matrix([[2 * OMEGA**2]]), mass, np.array([2.0]), dt, [lambda t: np.cos(t) * np.array([2.0])])
     *_, last = march(system, np.zeros(1), np.ones(1), dt, n_steps)
     w2, t = OMEGA**2, T_END
     free_cos, free_sin = -1 / w2 - 1 / (w2 - 1), 1 / OMEGA  # u(0) = 0, v(0) = 1

@@ -1,0 +1,67 @@
+"""The paper's hinged strip under a pressure patch moving along its span (prism): a load that
+varies in space and time, as a wheel on a rail or a bridge.
+
+The issue's values: the notched strip's span L = 0.3 m, thickness h = 0.1 m, steel (E = 2.1e11
+Pa, nu = 0.3, rho = 7800 kg/m^3), elastic, unnotched by default (``notch_depth`` as the notched
+strip's); a pressure q = 1e6 Pa (compression positive) on a patch 0.03 m long across the top
+face, moving from x3 = 0 towards x3 = L at 1000 m/s: at time t it covers
+[1000 t - 0.03, 1000 t] within [0, L] (it enters the strip over the first 3e-5 s and leaves it
+at 3.3e-4 s); t_end = 6e-4 s; probes ``mid_uz`` (u_2 on the top face at mid-span) and ``q_uz``
+(at x3 = L / 4).
+Ours: dt and the number of Fourier terms (by the convergence study in the module's
+``PROVENANCE``), the plastic load q = 2e8 Pa (the patch's own local yield under its edges,
+which the notch's hinge then feeds), the notch's material contrast 1e-6 as the notched strip's.
+"""
+
+from .case import Case
+from .geometry import PRISM, Axis, Cutout, Pressure, Probe, Section, Support
+from .material import Material
+from .notched_strip import H, L, N_Z, NOTCH_X3, Z_PEPS_NOTCH
+from .params import COMMON, MAX_STRESS, Spec
+
+NAME = "moving_load"
+TITLE = "Hinged strip under a pressure patch moving along the span at 1000 m/s (prismatic, plane strain)"
+PATCH, SPEED = 0.03, 1000.0
+Q_ELASTIC, Q_PLASTIC = 1.0e6, 2.0e8
+
+DEFAULTS = dict(
+    dt=2e-6, t_end=6e-4, refine=1, harmonics=60, E=2.1e11, nu=0.3, rho=7.8e3, tau_s=1.7e8,
+    plastic=False, tol=1e-5, dim=2, q=None, notch_depth=0.0, contrast=1e-6, speed=SPEED,
+)
+SPECS = dict(
+    COMMON,
+    q=Spec(float, -MAX_STRESS, MAX_STRESS, help="patch pressure, Pa (default 1e6 elastic, 2e8 plastic)"),
+    notch_depth=Spec(float, 0.0, Z_PEPS_NOTCH, open_hi=True,
+                     help="notch depth at mid-span, m (0 = no notch, the default)"),
+    contrast=Spec(float, 0.0, 1.0, open_lo=True, help="stiffness and density factor of notch material"),
+    speed=Spec(float, 1e-3, 1e5, help="the patch's speed along the span, m/s"),
+)
+PROVENANCE = dict(
+    issue="L, h, steel, elastic, q = 1e6 Pa, the 0.03 m patch from x3 = 0 at 1000 m/s, t_end = 6e-4 s, "
+    "probes mid_uz and q_uz, notch_depth as the notched strip's",
+    ours="dt = 2e-6 s and 60 Fourier terms (a first choice, to be set by the convergence study), the plastic "
+    "load 2e8 Pa, contrast 1e-6, element width across the plane-strain width, tol",
+)
+
+
+def build(p: dict) -> Case:
+    p = dict(p, q=p["q"] if p["q"] is not None else (Q_PLASTIC if p["plastic"] else Q_ELASTIC))
+    dz = H / N_Z
+    section = Section(
+        "rect", s=Axis((0.0, dz), (1,), refinable=False), t=Axis((0.0, H), (N_Z,)),
+        edges={"bottom": "t_min", "top": "t_max"},
+    )
+    probes = [Probe("mid_uz", "point", "u", (2,), point=(0.0, H, L / 2)),
+              Probe("q_uz", "point", "u", (2,), point=(0.0, H, L / 4))]
+    if p["plastic"]:
+        probes.append(Probe("peps_max", "max", "peps"))
+    d = p["notch_depth"]
+    return Case(
+        name=NAME, title=TITLE, body=PRISM, section=section, length=L,
+        material=Material(p["E"], p["nu"], p["rho"], p["tau_s"], plastic=p["plastic"]),
+        loads=(Pressure(p["q"], "top", ((-PATCH, 0.0),), speed=p["speed"]),),
+        supports=(Support("all", (1,)),),
+        probes=tuple(probes), params=p,
+        cutouts=(Cutout((0.0, dz), (0.0, d), (NOTCH_X3,)),) if d > 0 else (),
+        contrast=p["contrast"], provenance=PROVENANCE,
+    )

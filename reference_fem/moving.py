@@ -1,0 +1,124 @@
+"""A pressure patch moving along x3 on the reference model: its nodal forces at any time.
+
+The patch covers ``load.intervals_at(t)`` (:class:`cases.geometry.Pressure`). A facet of the
+loaded surface is covered whole, not at all, or in part where a patch edge crosses it; the
+part is integrated exactly by a Gauss rule on the covered range of the facet's reference
+coordinate along x3 (x3 is affine in it on the swept meshes of :mod:`reference_fem.mesh`: a
+prism's span exactly, a ring's angle to the geometry's own interpolation error). So the load
+moves continuously, not facet by facet, and needs no mesh line at the patch's edges.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.sparse as sp
+from skfem import FacetBasis
+
+from cases.geometry import RING
+from cases.params import UnsupportedCase
+
+from .frames import AXISYMMETRIC, x3_of
+
+#: Gauss points per facet direction (exact for the quadratic facets' integrands)
+POINTS = 4
+#: a reference-coordinate range this close to 0 or 1 is the facet's end (round-off)
+SNAP = 1e-12
+
+
+class MovingPressure:
+    """Nodal forces ``t -> Q(t)`` (unit amplitude) of a moving pressure ``load`` on ``model``."""
+
+    def __init__(self, model, load):
+        if model.rep == AXISYMMETRIC:
+            raise UnsupportedCase("reference solver: a load moving round the axis needs dim=3 (the axisymmetric "
+                                  "section has no theta)")
+        self.model, self.load, self.case = model, load, model.case
+        self.facets = model.edge_facets(load.edge)
+        self.fdim = model.dim - 1
+        self.z0, self.dz, self.along = self._x3_along_facets()
+        self.columns = self._columns(self._basis(self.facets, self._rule(0.0, 1.0, 0)))  # each facet's whole load
+
+    def _basis(self, facets, quadrature) -> FacetBasis:
+        return FacetBasis(self.model.rmesh.mesh, self.model.element, facets=facets, quadrature=quadrature)
+
+    def _x3_along_facets(self):
+        """Per facet: x3 at its reference origin, its change along the reference coordinate it
+        varies along, and which coordinate that is; refused if x3 is not affine along one."""
+        X = np.hstack([np.zeros((max(self.fdim, 1), 1)), np.eye(max(self.fdim, 1))])  # origin and unit points
+        x = np.asarray(self._basis(self.facets, (X, np.ones(X.shape[1]))).global_coordinates())  # (dim, nf, np)
+        x3 = x3_of(self.case, self.model.rep, x.reshape(x.shape[0], -1)).reshape(x.shape[1:])
+        d = x3[:, 1:] - x3[:, :1]
+        if self.case.body == RING:
+            d = np.mod(d + math.pi, 2 * math.pi) - math.pi
+        along = np.argmax(np.abs(d), axis=1)
+        dz = d[np.arange(d.shape[0]), along]
+        across = np.abs(d).sum(axis=1) - np.abs(dz)
+        if np.any(across > 1e-9 * np.abs(dz).max()) or np.any(dz == 0):
+            raise UnsupportedCase("reference solver: a moving load's surface must be swept along x3 (its facets' "
+                                  "x3 affine along one side)")
+        return x3[:, 0], dz, along
+
+    def _rule(self, lo: float, hi: float, along: int):
+        """A Gauss rule on the facet's reference cell, ``[lo, hi]`` along coordinate ``along``."""
+        g, w = np.polynomial.legendre.leggauss(POINTS)
+        s, ws = lo + (hi - lo) * 0.5 * (g + 1), 0.5 * (hi - lo) * w
+        if self.fdim == 1:
+            return s[None, :], ws
+        r, wr = 0.5 * (g + 1), 0.5 * w
+        a, b = np.meshgrid(s, r, indexing="ij")
+        X = np.stack([a.ravel(), b.ravel()] if along == 0 else [b.ravel(), a.ravel()])
+        return X, np.outer(ws, wr).ravel()
+
+    def _local(self, fb: FacetBasis) -> np.ndarray:
+        """(n_local, n_facets): the unit pressure's load on each local dof, ``int -n . v ds``."""
+        n = np.asarray(fb.normals)
+        return -np.stack([np.einsum("dfq,dfq,fq->f", fb.basis[i][0].value, n, fb.dx)
+                          for i in range(fb.Nbfun)])
+
+    def _columns(self, fb: FacetBasis) -> sp.csc_matrix:
+        local = self._local(fb)
+        cols = np.broadcast_to(np.arange(local.shape[1]), local.shape)
+        return sp.csc_matrix((local.ravel(), (fb.element_dofs.ravel(), cols.ravel())),
+                             shape=(self.model.basis.N, local.shape[1]))
+
+    def coverage(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Per facet, the covered range ``[lo, hi]`` of its reference coordinate along x3 (an
+        empty one: ``lo >= hi``). Two separate covered parts on one facet are refused (a patch
+        or a gap narrower than a facet: refine the mesh)."""
+        lo, hi = np.ones(self.dz.size), np.zeros(self.dz.size)
+        for a, b in self.load.intervals_at(t, self.case.body, self.case.length):
+            for shift in self._shifts(a, b):
+                s1, s2 = (a + shift - self.z0) / self.dz, (b + shift - self.z0) / self.dz
+                s_lo, s_hi = np.clip(np.minimum(s1, s2), 0, 1), np.clip(np.maximum(s1, s2), 0, 1)
+                hit = s_hi > s_lo
+                apart = hit & (hi > lo) & ((s_lo > hi + SNAP) | (s_hi < lo - SNAP))
+                if apart.any():
+                    raise UnsupportedCase("reference solver: two separate parts of a moving load on one facet; "
+                                          "refine the mesh along x3")
+                lo[hit], hi[hit] = np.minimum(lo[hit], s_lo[hit]), np.maximum(hi[hit], s_hi[hit])
+        lo[lo < SNAP], hi[hi > 1 - SNAP] = 0.0, 1.0
+        return lo, hi
+
+    def _shifts(self, a: float, b: float) -> tuple[float, ...]:
+        """The turns ``2 pi j`` that bring ``[a, b]`` over the facets' x3 (a prism: none)."""
+        if self.case.body != RING:
+            return (0.0,)
+        period = 2 * math.pi  # the facets' x3 lies within (-2 pi, 4 pi)
+        return tuple(period * j for j in range(math.floor((-period - b) / period), math.ceil((2 * period - a) / period) + 1))
+
+    def __call__(self, t: float) -> np.ndarray:
+        """The unit pressure's nodal forces at ``t`` (N; the case's ``q`` and amplitude not in it)."""
+        lo, hi = self.coverage(t)
+        whole = (lo == 0.0) & (hi == 1.0)
+        Q = self.columns @ whole.astype(float)
+        part = np.flatnonzero((hi > lo) & ~whole)
+        if part.size:
+            keys = np.round(np.column_stack([lo[part], hi[part], self.along[part]]), 12)
+            groups, which = np.unique(keys, axis=0, return_inverse=True)
+            for g, (a, b, along) in enumerate(groups):
+                facets = self.facets[part[which.ravel() == g]]
+                fb = self._basis(facets, self._rule(a, b, int(along)))
+                np.add.at(Q, fb.element_dofs.ravel(), self._local(fb).ravel())
+        return Q
