@@ -5,7 +5,8 @@ The issue's values (its scene, not the paper's): inner layer r in [1.0, 1.4] m o
 (E = 2.1e11 Pa, nu = 0.3, rho = 7800 kg/m^3, tau_s = 1.7e8 Pa), outer layer r in [1.4, 2.0] m of
 aluminium (E = 7.0e10 Pa, nu = 0.33, rho = 2700 kg/m^3, tau_s = 0.9e8 Pa), bonded; pressure q
 (compression positive) on the outer surface over |theta| <= 45 deg and |theta - 180 deg| <= 45 deg,
-held from t = 0; elastic q = 1 Pa; dt = 4e-5 s, t_end = 4e-3 s, 8 + 12 elements through the two
+held from t = 0 (or, with ``load = pulse``, through the amplitude (0, 0), (2e-4 s, 1), (6e-4 s, 0), zero
+after); elastic q = 1 Pa; dt = 4e-5 s, t_end = 4e-3 s, 8 + 12 elements through the two
 layers, 20 harmonics; probes A, B, C as the thick cylinder's and I on the interface.
 Ours: the plastic load q = 5e7 Pa (the thick cylinder's), which yields both layers (peps up to
 about 0.6 % in each by t_end: tests/test_layered.py), and the axial element length (one
@@ -14,7 +15,7 @@ element, as long as a radial one of the inner layer).
 
 
 from .case import Case
-from .geometry import RING, Axis, Pressure, Probe, Region, Section, Support
+from .geometry import RING, Amplitude, Axis, Pressure, Probe, Region, Section, Support
 from .material import Material
 from .params import COMMON, MAX_STRESS, MIN_MODULUS, Spec
 from .thick_cylinder import PATCHES, patch_probes
@@ -35,10 +36,16 @@ SPECS = dict(
     q=Spec(float, -MAX_STRESS, MAX_STRESS, help="patch pressure, Pa (default 1 elastic, 5e7 plastic)"),
     E_outer=Spec(float, MIN_MODULUS, MAX_STRESS, help="outer layer's Young's modulus, Pa (E, nu, rho, tau_s: the inner's)"),
     nu_outer=COMMON["nu"], rho_outer=COMMON["rho"], tau_s_outer=COMMON["tau_s"],
+    # absent from DEFAULTS (a step when not set), so the stored truth of the step keeps its key
+    load=Spec(str, choices=("step", "pulse"),
+              help="the patches' history: a step held from t = 0 (the default) or the pulse 0 -> 1 at 2e-4 s -> 0 "
+                   "at 6e-4 s"),
 )
+#: the pulse of ``load = pulse`` (the issue's): up over 0.2 ms, down by 0.6 ms, zero after
+PULSE = Amplitude(((0.0, 0.0), (2e-4, 1.0), (6e-4, 0.0)))
 PROVENANCE = dict(
     issue="the two layers' radii and materials, the 45 deg patches, q = 1 Pa, dt = 4e-5 s, t_end = 4e-3 s, "
-    "8 + 12 elements, 20 Fourier terms, probes A, B, C, I",
+    "8 + 12 elements, 20 Fourier terms, probes A, B, C, I; load = pulse and its amplitude",
     ours="plastic q = 5e7 Pa, axial element length, tol",
 )
 
@@ -58,7 +65,7 @@ def build(p: dict) -> Case:
         name=NAME, title=TITLE, body=RING, section=section,
         material=Material(p["E"], p["nu"], p["rho"], p["tau_s"], plastic=p["plastic"]),
         regions=(Region("outer", outer, s_range=(R_I, R2), t_range=(0.0, dz)),),
-        loads=(Pressure(p["q"], "outer", PATCHES),),
+        loads=(Pressure(p["q"], "outer", PATCHES, amplitude=PULSE if p.get("load") == "pulse" else None),),
         supports=(Support("all", (2,)),),
         probes=tuple(probes), params=p, provenance=PROVENANCE,
     )
