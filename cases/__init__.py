@@ -14,15 +14,24 @@ from .params import ParameterError, UnsupportedCase, parse_sets, validate
 
 _MODULES = (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact, layered_cylinder, flywheel, moving_load)
 CASES = {m.NAME: m for m in _MODULES}
+#: scenes that are a built-in scene at other parameters, under their own name (their stored
+#: truth, example file and report section): the scene builds a case of this name whenever its
+#: parameters are these
+VARIANTS = {layered_cylinder.PULSE_NAME: (layered_cylinder.NAME, {"load": "pulse"})}
 
 
 def get_case(name: str | Path, overrides: dict | None = None) -> Case:
     """Build case ``name`` with validated ``overrides`` (keys and values: docs/scenes.md);
-    a ``name`` ending in ``.toml`` is a scene file (docs/scenes.md, "Scenes from a file")."""
+    a ``name`` ending in ``.toml`` is a scene file (docs/scenes.md, "Scenes from a file");
+    a name of :data:`VARIANTS` is its scene at its parameters (the overrides on top)."""
     if str(name).lower().endswith(".toml"):
         return scene_file.load(name, overrides)
+    if name in VARIANTS:
+        name, fixed = VARIANTS[name]
+        overrides = {**fixed, **(overrides or {})}
     if name not in CASES:
-        raise ParameterError(f"unknown case {name!r}: choose one of {', '.join(CASES)} or give a scene file NAME.toml")
+        raise ParameterError(f"unknown case {name!r}: choose one of {', '.join([*CASES, *VARIANTS])} or give a "
+                             "scene file NAME.toml")
     module = CASES[name]
     return module.build(validate(module.SPECS, module.DEFAULTS, overrides or {}, name))
 
@@ -37,4 +46,4 @@ def rebuild(case: Case, overrides: dict | None = None) -> Case:
     return get_case(case.name, params)
 
 
-__all__ = ["CASES", "Case", "ParameterError", "UnsupportedCase", "get_case", "parse_sets", "rebuild"]
+__all__ = ["CASES", "VARIANTS", "Case", "ParameterError", "UnsupportedCase", "get_case", "parse_sets", "rebuild"]

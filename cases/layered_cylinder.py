@@ -22,6 +22,8 @@ from .thick_cylinder import PATCHES, patch_probes
 
 NAME = "layered_cylinder"
 TITLE = "Bonded steel-aluminium cylinder, pressure on two opposite 90 deg patches (plane strain)"
+#: the scene with ``load = pulse``: a case of its own name (cases.VARIANTS)
+PULSE_NAME = "layered_cylinder_pulse"
 R1, R_I, R2 = 1.0, 1.4, 2.0
 N_INNER, N_OUTER = 8, 12
 Q_ELASTIC, Q_PLASTIC = 1.0, 5.0e7
@@ -61,11 +63,12 @@ def build(p: dict) -> Case:
     probes = patch_probes(R1, R2) + [Probe("I_ur", "point", "u", (1,), point=(R_I, 0.0, 0.0))]
     if p["plastic"]:
         probes.append(Probe("peps_max", "max", "peps"))
+    pulse = p.get("load") == "pulse"
     return Case(
-        name=NAME, title=TITLE, body=RING, section=section,
+        name=PULSE_NAME if pulse else NAME, title=TITLE + (", a pulse" if pulse else ""), body=RING, section=section,
         material=Material(p["E"], p["nu"], p["rho"], p["tau_s"], plastic=p["plastic"]),
         regions=(Region("outer", outer, s_range=(R_I, R2), t_range=(0.0, dz)),),
-        loads=(Pressure(p["q"], "outer", PATCHES, amplitude=PULSE if p.get("load") == "pulse" else None),),
+        loads=(Pressure(p["q"], "outer", PATCHES, amplitude=PULSE if pulse else None),),
         supports=(Support("all", (2,)),),
         probes=tuple(probes), params=p, provenance=PROVENANCE,
     )

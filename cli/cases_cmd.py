@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from cases import CASES
+from cases import CASES, VARIANTS
 
 
 def add(sub) -> None:
@@ -16,6 +16,8 @@ def list_cases() -> str:
         for key, spec in module.SPECS.items():
             default = module.DEFAULTS.get(key)
             lines.append(f"    {key:<12} default {default!s:<22} {spec.describe()}  {spec.help}")
+    for name, (scene, params) in VARIANTS.items():
+        lines.append(f"{name}: {scene} with " + ", ".join(f"{k}={v}" for k, v in params.items()))
     return "\n".join(lines)
 
 
