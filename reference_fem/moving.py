@@ -74,7 +74,7 @@ class MovingPressure:
     def _local(self, fb: FacetBasis) -> np.ndarray:
         """(n_local, n_facets): the unit pressure's load on each local dof, ``int -n . v ds``."""
         n = np.asarray(fb.normals)
-        return -np.stack([np.einsum("dfq,dfq,fq->f", fb.basis[i][0].value, n, fb.dx)
+        return -np.stack([np.einsum("dfq,dfq,fq->f", np.asarray(fb.basis[i][0]), n, fb.dx)
                           for i in range(fb.Nbfun)])
 
     def _columns(self, fb: FacetBasis) -> sp.csc_matrix:
