@@ -17,7 +17,8 @@ CASES = {m.NAME: m for m in _MODULES}
 #: scenes that are a built-in scene at other parameters, under their own name (their stored
 #: truth, example file and report section): the scene builds a case of this name whenever its
 #: parameters are these
-VARIANTS = {layered_cylinder.PULSE_NAME: (layered_cylinder.NAME, {"load": "pulse"})}
+VARIANTS = {layered_cylinder.PULSE_NAME: (layered_cylinder.NAME, {"load": "pulse"}),
+            moving_load.NOTCHED_NAME: (moving_load.NAME, moving_load.NOTCHED)}
 
 
 def get_case(name: str | Path, overrides: dict | None = None) -> Case:

@@ -246,6 +246,22 @@ def _quick_studies() -> tuple[CaseStudy, ...]:
             _s(SMFEM, *grid("flywheel", ({},), (0.5, 1, 2))),
         ), reference=None,
             truth=FLYWHEEL_TRUTH),
+        # the loads issue's scenes: light series (the full report carries the rest)
+        CaseStudy("layered_cylinder_pulse", (
+            _s(SMFEM, *grid("layered_cylinder_pulse", ({"harmonics": 20}, {"refine": 2, "harmonics": 40}),
+                            (1, 2, 4, 8, 16))),
+            _s(REF2D, *grid("layered_cylinder_pulse", _r(1, 2), (1, 2, 4))),
+        ), reference=(REF2D, {"refine": 2}),
+            truth=TruthPlan(MODAL_TRUTH, refine=(1, 2, 4), harmonics=(20, 40, 80))),
+        CaseStudy("moving_load", (
+            _s(SMFEM, *grid("moving_load", ({"harmonics": 20}, {"harmonics": 60}, {"harmonics": 120}), (0.5, 1, 2, 4))),
+            _s(REF2D, *grid("moving_load", _r(1, 2), (1, 2))),
+        ), reference=(REF2D, {"refine": 2}),
+            truth=TruthPlan(MODAL_TRUTH, refine=(1, 2, 4), harmonics=(60, 120, 240))),
+        CaseStudy("moving_load_notched", (
+            _s(SMFEM, *grid("moving_load_notched", ({"harmonics": 60}, {"harmonics": 120}, {"harmonics": 160}), (1, 2))),
+            _s(REF2D, *grid("moving_load_notched", _r(1), (1, 2)), {"refine": 2}),
+        ), reference=(REF2D, {"refine": 2}), truth=TruthPlan(TIME_TRUTH, refine=(1, 2))),
     )
 
 
@@ -310,6 +326,30 @@ def full() -> tuple[CaseStudy, ...]:
             _s(REF3D, *FLYWHEEL_3D),
         ), reference=None,
             truth=FLYWHEEL_TRUTH),
+        CaseStudy("layered_cylinder_pulse", (
+            _s(SMFEM, *grid("layered_cylinder_pulse", ({"harmonics": 20}, {"refine": 2, "harmonics": 40},
+                                                       {"refine": 4, "harmonics": 80}), (1, 2, 4, 8, 16))),
+            _s(SMFEM_QUAD9, *grid("layered_cylinder_pulse", ({"harmonics": 40},), (4, 16))),
+            _s(REF2D, *grid("layered_cylinder_pulse", _r(1, 2), (1, 2, 4, 8, 16))),
+            _s(CALCULIX, {}),
+        ), reference=(REF2D, {"refine": 4}),
+            truth=TruthPlan(MODAL_TRUTH, refine=(4, 8, 16), harmonics=(320, 640, 1280))),
+        CaseStudy("moving_load", (
+            _s(SMFEM, *grid("moving_load", ({"harmonics": 20}, {"harmonics": 60}, {"harmonics": 120},
+                                            {"refine": 2, "harmonics": 240}), (0.5, 1, 2, 4, 8))),
+            _s(SMFEM_QUAD9, *grid("moving_load", ({"harmonics": 120},), (1, 2, 4, 8))),
+            _s(REF2D, *grid("moving_load", _r(1, 2, 4), (1, 2, 4, 8))),
+            _s(REF3D, *grid("moving_load", _r(1), (1, 2))),
+            _s(CALCULIX, {}),
+        ), reference=(REF2D, {"refine": 4}),
+            truth=TruthPlan(MODAL_TRUTH, refine=(2, 4, 8), harmonics=(120, 240, 480))),
+        CaseStudy("moving_load_notched", (
+            _s(SMFEM, *grid("moving_load_notched", ({"harmonics": 60}, {"harmonics": 120}, {"harmonics": 160},
+                                                    {"harmonics": 240}), (1, 2, 4))),
+            _s(REF2D, *grid("moving_load_notched", _r(1), (1, 2, 4)), *grid("moving_load_notched", _r(2), (1, 2))),
+            _s(REF3D, *grid("moving_load_notched", _r(1), (1,))),
+        ), reference=(REF2D, {"refine": 3}),
+            truth=explicit_truth(bbar=True)),
     )
 
 

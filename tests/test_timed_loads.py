@@ -173,3 +173,20 @@ def test_the_reference_integrates_a_partly_covered_facet_exactly(dim):
         (a, b), = case.loads[0].intervals_at(t, case.body, case.length)
         assert Q.sum() == pytest.approx(-(b - a) * width, rel=1e-12)
         assert Q @ x3 == pytest.approx(-0.5 * (b * b - a * a) * width, rel=1e-12)
+
+
+def test_a_truths_key_holds_the_loads_history_and_path():
+    """The stored truths' keys (studies.stored) name a load's amplitude and speed; a step held in
+    place keys as it did before loads had a history (the stored truths stand)."""
+    from studies.stored import case_definition, key_of
+    from studies.truth import plan_for
+
+    step = get_case("layered_cylinder")
+    plan = plan_for("layered_cylinder", {}, "full")
+    definition = case_definition(step)
+    assert "amplitude" not in definition["loads"][0] and "speed" not in definition["loads"][0]
+    pulse = get_case("layered_cylinder_pulse")
+    assert case_definition(pulse)["loads"][0]["amplitude"]["points"][1] == (2e-4, 1.0)
+    faster = replace(pulse, loads=(replace(pulse.loads[0], speed=1.0),))
+    keys = {key_of(c, plan) for c in (step, pulse, faster)}
+    assert len(keys) == 3
