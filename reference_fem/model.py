@@ -98,7 +98,7 @@ class Model:
         self.Q = self._load_vector()
         #: the loads that vary in time (force terms, then pressures with an amplitude or moving)
         #: as callables ``t -> nodal forces`` (full dofs)
-        self.timed_terms = [self._timed(*self._force_vector(term)) for term in case.forces] + \
+        self.timed_terms = [self._timed(*self.force_vector(term)) for term in case.forces] + \
             [self._timed_pressure(load) for load in case.loads if load.timed]
         self.fixed = self._fixed_dofs()
         if fix_rigid_body and case.body == RING and self.rep != AXISYMMETRIC:
@@ -180,7 +180,7 @@ class Model:
         unit = MovingPressure(self, load)
         return lambda t: (load.q * float(g(t))) * unit(t)
 
-    def _force_vector(self, term):
+    def force_vector(self, term):
         """A force term's time function and load vector: its pattern at the quadrature points of
         the elements (a body force) or of the edge's boundary facets (a traction), in body
         coordinates and components, turned into the mesh frame."""

@@ -295,7 +295,7 @@ register(Solver(REF3D, **_ON_A_MESH, dim=3, label="reference FEM 3D", color="C2"
                 prose="the 3D reference", command_line=False, dear=True))
 register(Solver(MODAL, _modal, supports=frozenset(), label="reference FEM, harmonic model", color="C5", marker="v",
                 harmonics=True, command_line=False, series=False))
-register(Solver(CALCULIX, _calculix, supports=frozenset((PLASTICITY,)), label="CalculiX", color="C4", marker="D",
+register(Solver(CALCULIX, _calculix, supports=frozenset((PLASTICITY, FORCES)), label="CalculiX", color="C4", marker="D",
                 prose="CalculiX", dear=True))
 register(Solver(EXPLICIT, _explicit, supports=EVERYTHING - {FORCES}, label="reference FEM, explicit", color="C6",
                 marker="P", series=False, options=partial(dict, _EXPLICIT_OPTIONS),

@@ -4,8 +4,9 @@ The mesh's quadratic Lagrange elements lose their face and centre nodes and beco
 elements: CPE8 (plane strain), CAX8 (axisymmetric; x = r, y = z) or C3D20. Everything else is
 the case's: the elastic material, von Mises plasticity as a table (ideal, or linear isotropic
 hardening), a material and a solid section per region of another material (on the element set
-of its elements), the pressures as element-face loads under a step amplitude (on at t = 0), the
-reference's supports (so the same dofs are fixed), the initial velocity, implicit dynamics (fixed
+of its elements), the loads under their amplitudes (:mod:`.loads`: pressures as element-face
+loads, a moving one per facet, force terms as nodal forces), the reference's supports (so the
+same dofs are fixed), the initial velocity, implicit dynamics (fixed
 increments of dt where linear; see :func:`fixed_increments`) and Newmark's average acceleration (``ALPHA = 0``: beta = 1/4, gamma = 1/2, the
 case's convention) and output at every increment. A rigid wall is a unilateral gap element
 (GAPUNI) from each node of the struck face to a fixed ground node, with the spring of the
@@ -25,6 +26,7 @@ from ..face import plane_face
 from ..frames import AXISYMMETRIC, SOLID, body_point_to_mesh
 from ..mesh import vtk_cells
 from ..model import Model
+from .loads import Amplitudes, force_cards, pressure_cards, refuse_early
 
 #: corner nodes (0-based, in the element's order) of each face P1 ... of CPE8/CAX8 and C3D20
 FACES = {
@@ -93,6 +95,9 @@ def build_deck(case, every: int = 1) -> Deck:
         raise UnsupportedCase("calculix: contact with plasticity is not exported (as in the reference FEM)")
     for mat in case.materials:
         _law_cards(mat)
+    if case.variation:
+        raise UnsupportedCase("calculix: a material varying along x3 (variation) is not exported")
+    refuse_early(case)
     model = Model(case)
     mesh, rep, dim = model.rmesh.mesh, model.rep, model.dim
     _, cells = vtk_cells(mesh)
@@ -124,13 +129,17 @@ def build_deck(case, every: int = 1) -> Deck:
                 *(f"** {name}: node {node}" for name, node in probe_nodes.items()),
                 *(line for name, node in probe_nodes.items() for line in (f"*NSET, NSET=P_{name.upper()}", f"{node}")),
                 "*NSET, NSET=PROBES", *_rows(sorted(set(probe_nodes.values())))]
-    out += ["*AMPLITUDE, NAME=STEPLOAD", f"0., 1., {case.t_end:.13g}, 1."]
+    # the loads first: what cannot be exported is refused before anything else is done
+    amplitudes = Amplitudes(case.t_end)
+    loads = pressure_cards(case, model, lambda facets: _element_faces(model, cells, facets, dim), amplitudes)
+    loads += force_cards(case, model, cells, amplitudes)
+    out += ["*AMPLITUDE, NAME=STEPLOAD", f"0., 1., {case.t_end:.13g}, 1.", *amplitudes.cards()]
     if fixed_increments(case):
         out += [f"*STEP, INC={case.n_steps + 10}", "*DYNAMIC, DIRECT, ALPHA=0.", f"{case.dt:.13g}, {case.t_end:.13g}"]
     else:  # ccx's own increments, at most dt, cut back where its Newton does not converge
         out += [f"*STEP, INC={100 * case.n_steps}", "*DYNAMIC, ALPHA=0.",
                 f"{case.dt:.13g}, {case.t_end:.13g}, {case.dt * MIN_INCREMENT:.13g}, {case.dt:.13g}"]
-    out += _pressures(case, model, cells, dim)
+    out += loads
     node_out = "U, V" + (", RF" if case.wall is not None else "")
     el_out = "S" + (", PEEQ" if case.material.plastic else "")
     two_d = ("" if dim == 3 else ", OUTPUT=2D") + (f", FREQUENCY={every}" if every > 1 else "")
@@ -290,16 +299,6 @@ def _element_faces(model: Model, cells: np.ndarray, facets: np.ndarray, dim: int
         else:
             raise AssertionError(f"facet {f} is no face of element {e}")
     return out
-
-
-def _pressures(case, model: Model, cells: np.ndarray, dim: int) -> list[str]:
-    lines = []
-    for load in case.loads:
-        if load.mode is not None:
-            raise UnsupportedCase("calculix: a single-harmonic load (mode) is not exported")
-        lines += ["*DLOAD, AMPLITUDE=STEPLOAD"]
-        lines += [f"{e + 1}, P{k}, {load.q:.13g}" for e, k in _element_faces(model, cells, model.load_facets(load), dim)]
-    return lines
 
 
 def _wall(model: Model, points, cells, element: str) -> list[str]:
