@@ -12,6 +12,11 @@ in common with the SMFEM element but the basis functions along x3 that the case'
 dictates (the separation of variables is exact for such bodies); :mod:`reference_fem.modal`
 integrates it exactly in time.
 
+A harmonic's load is ``Q + sum_k Q_k f_k(t)``: ``Q`` the pressures held from t = 0, and one
+:class:`LoadTerm` per pressure that varies in time: an amplitude scales its usual vector, and a
+moving patch's share of harmonic ``l`` is ``q g(t)`` times the integral of the basis function
+over the intervals it covers at t, times the unit pressure's vector of the edge.
+
 A section axis marked not refinable (one element across a plane-strain width or axial length)
 is one the solution does not vary along: the nodes on each line across it share their
 amplitudes, which leaves a 1-D problem per harmonic (exact plane strain, since that axis's
@@ -21,13 +26,15 @@ displacement is held at zero by the case's support on ``'all'``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 from skfem import CellBasis, ElementQuad2, FacetBasis, LinearForm, asm
 
 from cases.geometry import PRISM, RING, interval_fourier
+from cases.histories import time_factor
 from cases.params import UnsupportedCase
 
 from . import regions
@@ -62,6 +69,8 @@ def unsupported_reason(case) -> str | None:
         return "only the symmetric family of harmonics is built"
     if case.initial_velocity:
         return "only loads from rest are built"
+    if case.forces:
+        return "body forces and tractions are not built"
     bad = [p.name for p in case.probes if p.kind != "point" or p.field not in ("u", "v")]
     if bad:
         return f"probes {', '.join(bad)} are not point displacements or velocities"
@@ -69,15 +78,35 @@ def unsupported_reason(case) -> str | None:
 
 
 @dataclass
+class LoadTerm:
+    """One load of a harmonic that varies in time: ``Q f(t)``.
+
+    Attributes
+    ----------
+    Q : load amplitudes (N per unit of ``f``), on the free amplitudes once in a :class:`Harmonic`
+    factor : ``t -> f(t)`` for an array of times (a float for a float)
+    kinks : times (s, > 0) where ``f``'s slope may jump: ``f`` is smooth between them
+    rate : the angular rate (rad/s) of ``f`` between kinks beyond a straight line: 0 when ``f``
+        is piecewise linear (an amplitude), ``k speed`` for a moving patch
+    """
+
+    Q: np.ndarray
+    factor: Callable
+    kinks: tuple[float, ...] = ()
+    rate: float = 0.0
+
+
+@dataclass
 class Harmonic:
-    """One harmonic's reduced problem ``M a + K u = Q`` (free amplitudes).
+    """One harmonic's reduced problem ``M a + K u = Q + sum_k Q_k f_k(t)`` (free amplitudes).
 
     Attributes
     ----------
     l : harmonic number (ring: 0, 1, ...; prism: 1, 2, ...)
     K, M : csr matrices on the free amplitudes (N/m and kg, integrated over x3)
-    Q : (n,) load amplitudes (N)
+    Q : (n,) load amplitudes (N) of the pressures held from t = 0
     P : (n_probes, n) probe rows: a probe's value is ``P @ u`` for this harmonic's share
+    terms : the loads that vary in time (:class:`LoadTerm`)
     """
 
     l: int
@@ -85,6 +114,11 @@ class Harmonic:
     M: sp.csr_matrix
     Q: np.ndarray
     P: np.ndarray
+    terms: list[LoadTerm] = field(default_factory=list)
+
+    def load(self, t: float) -> np.ndarray:
+        """The whole load at time ``t`` (N)."""
+        return self.Q + sum(float(term.factor(t)) * term.Q for term in self.terms)
 
 
 class HarmonicModel:
@@ -128,13 +162,15 @@ class HarmonicModel:
         self.basis = CellBasis(self.mesh, ElementQuad2(), intorder=INTORDER)
         self.tie = self._tie()
         self._operators()
+        self._edges = {}
         n = harmonics or case.harmonics
         numbers = range(n) if case.body == RING else range(1, n + 1)
-        loads = {l: self._load(l) for l in numbers}
-        scale = max(np.abs(Q).max() for Q in loads.values())
+        loads = {l: (self._load(l), self._terms(l)) for l in numbers}
+        size = {l: _size(Q, terms, case.t_end) for l, (Q, terms) in loads.items()}
+        scale = max(size.values())
         # a load below round-off of the largest (cos 3 theta on the thick cylinder's patches) is none
-        self.systems = [h for h in (self._harmonic(l, Q) for l, Q in loads.items()
-                                    if np.abs(Q).max() > 1e-12 * scale) if h is not None]
+        self.systems = [h for h in (self._harmonic(l, *loads[l]) for l in numbers
+                                    if size[l] > 1e-12 * scale) if h is not None]
         if not self.systems:
             raise UnsupportedCase(f"harmonic model: {case.name}: no harmonic carries a load")
         self.n_dof = sum(h.K.shape[0] for h in self.systems)
@@ -205,7 +241,7 @@ class HarmonicModel:
         return normal, first, second
 
     # -- one harmonic ------------------------------------------------------------------------
-    def _harmonic(self, l: int, Q: np.ndarray) -> Harmonic | None:
+    def _harmonic(self, l: int, Q: np.ndarray, terms: list[LoadTerm]) -> Harmonic | None:
         case = self.case
         c1, c2 = _factors(case.body, l, case.length)
         normal, first, second = self._strains(l)
@@ -226,29 +262,56 @@ class HarmonicModel:
         K, M = sp.csr_matrix(K)[free][:, free], sp.csr_matrix(M)[free][:, free]
         K.eliminate_zeros()
         M.eliminate_zeros()
-        return Harmonic(l, K.tocsr(), M.tocsr(), Q[free], self._probe_rows(l)[:, free])
+        terms = [LoadTerm(term.Q[free], term.factor, term.kinks, term.rate) for term in terms]
+        return Harmonic(l, K.tocsr(), M.tocsr(), Q[free], self._probe_rows(l)[:, free], terms)
 
-    def _load(self, l: int) -> np.ndarray:
-        """Load amplitudes ``(3 n,)`` of the case's pressures for harmonic ``l``."""
+    def _load(self, l: int, loads=None) -> np.ndarray:
+        """Load amplitudes ``(3 n,)`` for harmonic ``l`` of ``loads`` (default: the case's
+        pressures held from t = 0)."""
         case = self.case
-        n = self.tie.shape[1]
-        Q = np.zeros(N_COMP * n)
+        Q = np.zeros(N_COMP * self.tie.shape[1])
         family = "cos" if case.body == RING else "sin"  # of U and W
         c1 = _factors(case.body, l, case.length)[0]
-        for load in case.loads:
+        for load in [x for x in case.loads if not x.timed] if loads is None else loads:
             if load.mode is not None:
                 f = load.q * c1 if l == load.mode else 0.0
             else:
                 f = load.q * interval_fourier(load.x3_intervals, l, family, case.body, case.length)
             if f == 0.0:
                 continue
-            fb = FacetBasis(self.mesh, ElementQuad2(), facets=self._edge_facets(load.edge), intorder=INTORDER)
-            x1 = np.asarray(fb.global_coordinates())[0]
-            weight = x1 if case.body == RING else np.ones_like(x1)
-            for comp in (0, 1):  # traction -q n on the section edge, per unit of q psi_l
-                v = asm(_traction, fb, weight=weight, e1=float(comp == 0), e2=float(comp == 1))
-                Q[comp * n:(comp + 1) * n] += f * (self.tie.T @ v)
+            Q += f * self._edge_vector(load.edge)
         return Q
+
+    def _edge_vector(self, edge: str) -> np.ndarray:
+        """``(3 n,)``: the traction ``-n`` of a unit pressure on ``edge``, per unit of its x3 integral."""
+        if edge in self._edges:  # the same for every harmonic
+            return self._edges[edge]
+        n = self.tie.shape[1]
+        Q = np.zeros(N_COMP * n)
+        fb = FacetBasis(self.mesh, ElementQuad2(), facets=self._edge_facets(edge), intorder=INTORDER)
+        x1 = np.asarray(fb.global_coordinates())[0]
+        weight = x1 if self.case.body == RING else np.ones_like(x1)
+        for comp in (0, 1):
+            v = asm(_traction, fb, weight=weight, e1=float(comp == 0), e2=float(comp == 1))
+            Q[comp * n:(comp + 1) * n] = self.tie.T @ v
+        self._edges[edge] = Q
+        return Q
+
+    def _terms(self, l: int) -> list[LoadTerm]:
+        """The case's pressures that vary in time, as :class:`LoadTerm` of harmonic ``l`` (all
+        dofs). A single Fourier term (``mode``) keeps its place, as in SMFEM."""
+        case, out = self.case, []
+        for load in case.loads:
+            if not load.timed:
+                continue
+            kinks = load.times_of_change(case.body, case.length, math.inf)
+            if load.moving and load.mode is None:
+                k = l if case.body == RING else l * math.pi / case.length
+                out.append(LoadTerm(self._edge_vector(load.edge), _moving_factor(load, l, case.body, case.length),
+                                    kinks, abs(k * load.speed)))
+            else:
+                out.append(LoadTerm(self._load(l, (load,)), time_factor(load), kinks))
+        return out
 
     def _edge_facets(self, edge: str) -> np.ndarray:
         sec, mesh = self.case.section, self.mesh
@@ -306,6 +369,50 @@ class HarmonicModel:
             comp = p.component[0] - 1
             rows[k, comp * n:(comp + 1) * n] = interp * _psi(case, l, comp, x3)
         return rows
+
+
+def _size(Q: np.ndarray, terms: list[LoadTerm], t_end: float) -> float:
+    """The largest load amplitude of a harmonic over ``[0, t_end]`` (sampled), to leave out the
+    harmonics whose load is round-off."""
+    t = np.linspace(0.0, t_end, 1025)
+    size = np.abs(Q).max()
+    for term in terms:
+        times = np.union1d(t, [x for x in term.kinks if x < t_end])
+        size += np.abs(term.Q).max() * np.abs(term.factor(times)).max()
+    return float(size)
+
+
+def covered_fourier(load, l: int, family: str, body: str, length: float, t) -> np.ndarray:
+    """``interval_fourier(load.intervals_at(t), l, family)`` for an array of times ``t``: the
+    same clipping (a prism's ``[0, length]``, where an empty interval gives zero) and integrals,
+    written on arrays (a moving load is looked at on many thousand times per harmonic)."""
+    t = np.asarray(t, float)
+    k = l if body == RING else l * math.pi / length
+    total = np.zeros(t.shape)
+    for a, b in load.x3_intervals:
+        lo, hi = a + load.speed * t, b + load.speed * t
+        if body != RING:
+            lo, hi = np.clip(lo, 0.0, length), np.clip(hi, 0.0, length)
+        if k == 0:
+            total += (hi - lo) if family == "cos" else 0.0
+        elif family == "cos":
+            total += (np.sin(k * hi) - np.sin(k * lo)) / k
+        else:
+            total += (np.cos(k * lo) - np.cos(k * hi)) / k
+    return total
+
+
+def _moving_factor(load, l: int, body: str, length: float):
+    """``t -> q g(t)`` times the x3 integral of harmonic ``l``'s basis function (U, W: ring cos,
+    prism sin) over the intervals a moving pressure covers at ``t``."""
+    g = time_factor(load)
+    family = "cos" if body == RING else "sin"
+
+    def factor(t):
+        value = load.q * np.asarray(g(t)) * covered_fourier(load, l, family, body, length, t)
+        return float(value) if np.ndim(value) == 0 else value
+
+    return factor
 
 
 @LinearForm

@@ -313,10 +313,13 @@ def _modal(case, plan, runs, window):
     grid = finest.history["t"].to_numpy()
     values, parts = {}, {}
     truncation = finest.summary["info"].get("truncation", {})
+    sampling = finest.summary["info"].get("load_sampling", {})
     for probe in case.probe_names:
         values[probe] = finest.history[probe].to_numpy()
         u_s, p_s = _ladder(space, [1 / r for r in plan.refine], probe, grid, window)
         part = {"space": u_s, "order_space": p_s, "modes": float(truncation.get(probe, 0.0))}
+        if sampling.get(probe, 0.0) > 0:  # a moving load sampled in time: its measured error (else exact)
+            part["time"] = float(sampling[probe])
         if harm:
             part["harmonics"], part["order_harmonics"] = _ladder(harm, [1 / n for n in plan.harmonics], probe, grid, window)
         if math.isfinite(p_s) and p_s <= 0:
