@@ -150,7 +150,9 @@ def test_every_case_of_the_quick_report_has_a_truth():
         notched = study.case.startswith("notched")
         assert all(len(d) >= (2 if notched and solver == REF3D else 3) for solver, d in dts.items()), (study.case, dts)
         calculix = [s.levels for s in study.series if s.solver == CALCULIX]
-        assert calculix == ([] if notched or study.case == "flywheel" else [({},)])
+        # ... nor the loads issue's scenes (48 and 123 CPU s in ccx: the full report's)
+        later = notched or study.case in ("flywheel", "layered_cylinder_pulse", "moving_load")
+        assert calculix == ([] if later else [({},)])
 
 
 def test_dome_orders_and_published_extrema_are_tabulated(tiny):
