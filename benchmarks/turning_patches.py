@@ -1,6 +1,6 @@
 """A load turning round a ring: SMFEM against the reference FEM in 2D and 3D, same dt.
 
-    python benchmarks/turning_patches.py [--quick]
+    python benchmarks/turning_patches.py [--quick] [--tiny]
 
 The scene ``examples/turning_patches.toml``: the thick cylinder's two 90 deg patches turning at
 500 rad/s. Each run at the scene's dt (so the differences are spatial: mesh and harmonics,
@@ -27,18 +27,20 @@ def difference(a, b, probes) -> dict[str, float]:
     return {p: probe_error(p, a.t, a.history[p], b.t, b.history[p])[1] for p in probes}
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="refine 1 and 2 only")
-    args = parser.parse_args()
+    parser.add_argument("--tiny", action="store_true", help="refine 1 and 2 over five steps (the tests run every benchmark so)")
+    args = parser.parse_args(argv)
     pin()
-    levels = (1, 2) if args.quick else (1, 2, 4)
+    levels = (1, 2) if args.quick or args.tiny else (1, 2, 4)
+    window = {"t_end": 5 * get_case(SCENE).dt} if args.tiny else {}
     runs = {}
     for r in levels:
-        runs["SMFEM", r] = solve(SMFEM, get_case(SCENE, {"refine": r, "harmonics": 20 * r}))
-        runs["2D", r] = solve(REFERENCE, get_case(SCENE, {"refine": r, "dim": 2}))
+        runs["SMFEM", r] = solve(SMFEM, get_case(SCENE, {"refine": r, "harmonics": 20 * r, **window}))
+        runs["2D", r] = solve(REFERENCE, get_case(SCENE, {"refine": r, "dim": 2, **window}))
     for r in levels[:2]:
-        runs["3D", r] = solve(REFERENCE, get_case(SCENE, {"refine": r, "dim": 3}))
+        runs["3D", r] = solve(REFERENCE, get_case(SCENE, {"refine": r, "dim": 3, **window}))
     probes = get_case(SCENE).probe_names
     for key, run in runs.items():
         used = run.info.get("harmonics_used", "")

@@ -237,8 +237,8 @@ def check_run(name, solver, sets):
         assert not o["written"]
         return code
     assert np.isfinite(o["history"].to_numpy()).all(), (code, err)
-    if code == 3:  # the message names the step; the history up to it is written
-        assert err.startswith(f"smfem: {name}: ") and "step" in err, err
+    if code == 3:  # the message names the case (a variant's own name) and the step; the history up to it is written
+        assert err.startswith(f"smfem: {get_case(name, sets).name}: ") and "step" in err, err
     else:
         assert len(o["history"]) == get_case(name, sets).n_steps + 1
     return code

@@ -23,6 +23,7 @@ from cases.geometry import RING
 from cases.params import UnsupportedCase
 
 from ..frames import AXISYMMETRIC
+from .serendipity import once, shares
 
 #: numbers per *AMPLITUDE data line (four (t, factor) pairs; ccx reads up to eight numbers)
 AMPLITUDE_PER_LINE = 8
@@ -188,21 +189,9 @@ def serendipity_forces(F: np.ndarray, cells: np.ndarray, dim: int) -> np.ndarray
     order) as the consistent forces of its serendipity elements: each face or centre node's
     force shared among the corners and mid-sides by the serendipity shape functions' values
     there (the transpose of :func:`.solver.complete`), zero left at those nodes."""
-    from .solver import HEX_EDGES, HEX_FACES
-
     out = F.copy()
-    if dim == 2:
-        shares = [(cells[:, 8], cells[:, :4], -0.25), (cells[:, 8], cells[:, 4:8], 0.5)]
-    else:
-        edge_of = {frozenset(e): 8 + k for k, e in enumerate(HEX_EDGES)}
-        mids = [[edge_of[frozenset((face[i], face[(i + 1) % 4]))] for i in range(4)] for face in HEX_FACES]
-        # every element's six faces; a face node is shared by two elements (as different faces)
-        faces = np.concatenate([cells[:, 20 + f] for f in range(6)])
-        shares = [(faces, np.concatenate([cells[:, list(face)] for face in HEX_FACES]), -0.25),
-                  (faces, np.concatenate([cells[:, m] for m in mids]), 0.5),
-                  (cells[:, 26], cells[:, :8], -0.25), (cells[:, 26], cells[:, 8:20], 0.25)]
-    for extra, nodes, weight in shares:
-        extra, once = np.unique(extra, return_index=True)  # each node's force goes out once
-        np.add.at(out, nodes[once], weight * F[extra][:, None, :])
+    for extra, nodes, weight in shares(cells, dim):
+        extra, nodes = once(extra, nodes)  # each node's force goes out once
+        np.add.at(out, nodes, weight * F[extra][:, None, :])
     out[np.unique(cells[:, 8 if dim == 2 else 20 :])] = 0.0
     return out

@@ -34,13 +34,12 @@ from ..frames import body_point_to_mesh, body_rotation
 from ..probes import body_mean_row
 from .deck import Deck, build_deck, fixed_increments
 from .frd import read_frd, read_sta
+from .serendipity import once, shares
 
 CCX = "ccx"
 PEEQ_NOTE = ("PEEQ: CalculiX's accumulated equivalent plastic strain, nodal (extrapolated from the integration "
              "points), not the case's sqrt(2/3 eps_p:eps_p); equal while the flow keeps its direction")
 #: the C3D20 mid-side nodes (in the VTK hexahedron's order 8 ... 19) and the faces' nodes
-HEX_EDGES = ((0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7))
-HEX_FACES = ((0, 3, 7, 4), (1, 2, 6, 5), (0, 1, 5, 4), (3, 2, 6, 7), (0, 1, 2, 3), (4, 5, 6, 7))
 
 
 WALL_REFUSED = (
@@ -211,13 +210,10 @@ def complete(cells: np.ndarray, nodal: np.ndarray, dim: int) -> np.ndarray:
     face and centre nodes of ``cells`` (VTK quad9 / hexahedron27) filled in: the serendipity
     interpolation there (-1/4 of the corners plus 1/2 of the mid-sides on a face or 2D centre;
     -1/4 of the corners plus 1/4 of the mid-sides at a hexahedron's centre)."""
-    if dim == 2:
-        nodal[cells[:, 8]] = -0.25 * nodal[cells[:, :4]].sum(axis=1) + 0.5 * nodal[cells[:, 4:8]].sum(axis=1)
-        return nodal
-    edge_of = {frozenset(e): 8 + k for k, e in enumerate(HEX_EDGES)}
-    for f, face in enumerate(HEX_FACES):
-        mids = [edge_of[frozenset((face[i], face[(i + 1) % 4]))] for i in range(4)]
-        nodal[cells[:, 20 + f]] = (-0.25 * nodal[cells[:, list(face)]].sum(axis=1)
-                                   + 0.5 * nodal[cells[:, mids]].sum(axis=1))
-    nodal[cells[:, 26]] = -0.25 * nodal[cells[:, :8]].sum(axis=1) + 0.25 * nodal[cells[:, 8:20]].sum(axis=1)
+    filled = np.zeros_like(nodal)
+    for extra, nodes, weight in shares(cells, dim):
+        extra, nodes = once(extra, nodes)
+        filled[extra] += weight * nodal[nodes].sum(axis=1)
+    extras = np.unique(cells[:, 8 if dim == 2 else 20:])
+    nodal[extras] = filled[extras]
     return nodal
