@@ -220,6 +220,14 @@ class Pressure:
         out = ((min(max(a + shift, 0.0), length), min(max(b + shift, 0.0), length)) for a, b in self.x3_intervals)
         return tuple((a, b) for a, b in out if b > a)
 
+    def ends_at(self, t, body: str, length: float) -> tuple:
+        """Each interval's ends at times ``t`` (arrays as ``t`` is), a prism's clipped to
+        ``[0, length]`` (an interval outside it has equal ends: it integrates to zero), for
+        :func:`interval_fourier` at many times."""
+        shift = self.speed * np.asarray(t, float)
+        ends = ((a + shift, b + shift) for a, b in self.x3_intervals)
+        return tuple(ends if body == RING else ((np.clip(a, 0.0, length), np.clip(b, 0.0, length)) for a, b in ends))
+
     def times_of_change(self, body: str, length: float, t_end: float) -> tuple[float, ...]:
         """The times in (0, t_end) at which the load's history has a kink: its amplitude's points,
         and on a prism where a moving interval's end meets the body's end."""
@@ -323,19 +331,23 @@ class Probe:
     edge: str | None = None
 
 
-def interval_fourier(intervals, l: int, family: str, body: str, length: float = 2 * math.pi) -> float:
+def interval_fourier(intervals, l, family: str, body: str, length: float = 2 * math.pi):
     """Exact integral over ``intervals`` of the basis function of harmonic ``l``.
 
     Ring: ``cos(l x3)`` (family ``'cos'``) or ``sin(l x3)`` (``'sin'``).
     Prism: ``sin(l pi x3 / length)`` (``'sin'``) or ``cos(...)`` (``'cos'``).
+    ``l`` and the intervals' ends may be numpy arrays (broadcast against each other: many
+    harmonics, or a moving load's ends at many times, :meth:`Pressure.ends_at`); a float for
+    scalars.
     """
-    k = l if body == RING else l * math.pi / length
+    l = np.asarray(l)
+    k = (l if body == RING else l * math.pi / length).astype(float)
+    zero = k == 0
+    safe = np.where(zero, 1.0, k)
     total = 0.0
     for a, b in intervals:
-        if k == 0:
-            total += (b - a) if family == "cos" else 0.0
-        elif family == "cos":
-            total += (math.sin(k * b) - math.sin(k * a)) / k
+        if family == "cos":
+            total = total + np.where(zero, np.subtract(b, a), (np.sin(k * b) - np.sin(k * a)) / safe)
         else:
-            total += (math.cos(k * a) - math.cos(k * b)) / k
-    return total
+            total = total + np.where(zero, 0.0, (np.cos(k * a) - np.cos(k * b)) / safe)
+    return float(total) if np.ndim(total) == 0 else total

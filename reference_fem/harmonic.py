@@ -383,23 +383,9 @@ def _size(Q: np.ndarray, terms: list[LoadTerm], t_end: float) -> float:
 
 
 def covered_fourier(load, l: int, family: str, body: str, length: float, t) -> np.ndarray:
-    """``interval_fourier(load.intervals_at(t), l, family)`` for an array of times ``t``: the
-    same clipping (a prism's ``[0, length]``, where an empty interval gives zero) and integrals,
-    written on arrays (a moving load is looked at on many thousand times per harmonic)."""
-    t = np.asarray(t, float)
-    k = l if body == RING else l * math.pi / length
-    total = np.zeros(t.shape)
-    for a, b in load.x3_intervals:
-        lo, hi = a + load.speed * t, b + load.speed * t
-        if body != RING:
-            lo, hi = np.clip(lo, 0.0, length), np.clip(hi, 0.0, length)
-        if k == 0:
-            total += (hi - lo) if family == "cos" else 0.0
-        elif family == "cos":
-            total += (np.sin(k * hi) - np.sin(k * lo)) / k
-        else:
-            total += (np.cos(k * lo) - np.cos(k * hi)) / k
-    return total
+    """``interval_fourier(load.intervals_at(t), l, family)`` for an array of times ``t`` (a
+    moving load is looked at on many thousand times per harmonic)."""
+    return interval_fourier(load.ends_at(t, body, length), l, family, body, length)
 
 
 def _moving_factor(load, l: int, body: str, length: float):

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from cases.geometry import PRISM, RING, interval_fourier
@@ -69,9 +67,11 @@ class TimedLoad:
         g = float(self.factor(t))
         if self.pressure is None:
             return np.full(len(modes), g)
-        covered = self.pressure.intervals_at(t, self.body, self.length)
-        moved = dataclasses.replace(self.pressure, x3_intervals=covered)
-        return g * np.array([pressure_x3_amplitude(moved, m, self.body, self.length) for m in modes])
+        l = np.array([m.l for m in modes])
+        sine = np.array([self.body == PRISM or m.family == "s" for m in modes])  # psi1's family
+        ends = self.pressure.ends_at(t, self.body, self.length)
+        shares = [interval_fourier(ends, l, family, self.body, self.length) for family in ("cos", "sin")]
+        return g * self.pressure.q * np.where(sine, shares[1], shares[0])
 
     def largest(self, modes: list[Mode], times: np.ndarray) -> np.ndarray:
         """Per mode, the largest magnitude of its load at ``times`` (which modes a load reaches)."""
