@@ -222,3 +222,18 @@ def test_patches_turning_round_a_ring_agree_with_the_3d_reference(tmp_path):
     full = solve("reference", get_case(scene, {"t_end": 1.2e-3, "refine": 2, "dim": 3}))
     for probe in full.history:
         assert relative(mine[probe].to_numpy(), full.history[probe]) < 0.01, probe
+
+
+def test_a_moving_load_the_solver_cannot_take_exits_2_writing_nothing(tmp_path, capsys):
+    """The flywheel's patch turning round the axis: its 2D reference is axisymmetric, which has
+    no theta to move along (the 3D model has)."""
+    text = (EXAMPLES / "flywheel.toml").read_text()
+    text = text.replace("symmetric = true", "symmetric = false").replace(
+        'x3_intervals = [["-patch_deg deg", "patch_deg deg"]]', 'x3_intervals = [["-patch_deg deg", "patch_deg deg"]]\nspeed = 10.0')
+    text = text.replace('file = "../cases/sections/flywheel.msh"', f'file = "{EXAMPLES.parent / "cases" / "sections" / "flywheel.msh"}"')
+    scene, out = tmp_path / "scene.toml", tmp_path / "out"
+    scene.write_text(text)
+    code = main(["run", str(scene), "--solver", "reference", "--set", "dim=2", "--out", str(out), "--estimate", "off"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "dim=3" in err and "Traceback" not in err, err
+    assert not out.exists()
