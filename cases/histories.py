@@ -26,20 +26,3 @@ def time_factor(load):
 
     g = time_function(text)
     return lambda t: g(t) * amplitude(t)
-
-
-def is_step(load) -> bool:
-    """Whether ``load`` is on at t = 0 and held where it is (today's default)."""
-    return load.amplitude is None and getattr(load, "time", "1") == "1" and not getattr(load, "speed", 0.0)
-
-
-def describe(load) -> str:
-    """A short phrase of a load's history, for reports and error messages."""
-    parts = []
-    if load.amplitude is not None:
-        parts.append("amplitude " + ", ".join(f"({t:g}, {f:g})" for t, f in load.amplitude.points))
-    if getattr(load, "speed", 0.0):
-        parts.append(f"moving at {load.speed:g} per s along x3")
-    if getattr(load, "time", "1") != "1":
-        parts.append(f"times {load.time}")
-    return "; ".join(parts) or "a step held from t = 0"
