@@ -13,13 +13,18 @@ def add(sub) -> None:
     study = sub.add_parser("study", help="convergence and error-against-CPU-time study: tables/*.csv, figures/")
     study.add_argument("cases", nargs="+", metavar="CASE")
     add_study_options(study, "out/study")
+    _store_fronts(study)
     study.set_defaults(handler=command)
     report = sub.add_parser("report", help="the verification report: index.html, report.pdf, tables/*.csv")
     add_study_options(report, "out/report")
-    report.add_argument("--store-fronts", action="store_true",
-                        help="keep each scene's measured work-precision points (tables/fronts.csv) with its stored "
-                             "truth, as truths/CASE/front.csv: where smfem run --tol starts")
+    _store_fronts(report)
     report.set_defaults(handler=command)
+
+
+def _store_fronts(parser) -> None:
+    parser.add_argument("--store-fronts", action="store_true",
+                        help="keep each scene's measured work-precision points (tables/fronts.csv) with its stored "
+                             "truth, as truths/CASE/front.csv: where smfem run --tol starts (a study: its scenes' only)")
 
 
 def command(args) -> int:

@@ -375,7 +375,8 @@ def test_explicit_plans_and_their_second_paths():
 
 
 # -- stored truths ---------------------------------------------------------------------------------
-SCENES = ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact", "layered_cylinder", "flywheel")
+SCENES = ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact", "layered_cylinder", "flywheel",
+          "layered_cylinder_pulse")
 
 
 def _stored(name):
