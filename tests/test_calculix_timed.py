@@ -172,6 +172,7 @@ def test_pulse_in_calculix_within_half_a_percent_of_the_reference_2d():
     assert max(worst.values()) < 0.005, worst
 
 
+@pytest.mark.slow  # 20-35 s of ccx: the default run keeps under its 5 minutes; the pulse above is the must
 @needs_ccx
 def test_moving_load_in_calculix_differs_from_the_reference_by_the_facet_size_effect(monkeypatch):
     """The 0.03 m patch entering the strip, over 80 us (in whole from 30 us; at 60 us the
