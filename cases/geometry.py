@@ -214,16 +214,13 @@ class Pressure:
 
     def intervals_at(self, t: float, body: str, length: float) -> tuple[tuple[float, float], ...]:
         """The x3 intervals the pressure covers at time ``t`` (empty ones left out)."""
-        shift = self.speed * t
-        if body == RING:  # the basis functions are periodic: a shifted interval needs no wrapping
-            return tuple((a + shift, b + shift) for a, b in self.x3_intervals)
-        out = ((min(max(a + shift, 0.0), length), min(max(b + shift, 0.0), length)) for a, b in self.x3_intervals)
-        return tuple((a, b) for a, b in out if b > a)
+        return tuple((float(a), float(b)) for a, b in self.ends_at(t, body, length) if b > a)
 
     def ends_at(self, t, body: str, length: float) -> tuple:
         """Each interval's ends at times ``t`` (arrays as ``t`` is), a prism's clipped to
         ``[0, length]`` (an interval outside it has equal ends: it integrates to zero), for
-        :func:`interval_fourier` at many times."""
+        :func:`interval_fourier` at many times. A ring's are shifted only: the basis functions
+        are periodic, so a shifted interval needs no wrapping."""
         shift = self.speed * np.asarray(t, float)
         ends = ((a + shift, b + shift) for a, b in self.x3_intervals)
         return tuple(ends if body == RING else ((np.clip(a, 0.0, length), np.clip(b, 0.0, length)) for a, b in ends))

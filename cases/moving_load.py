@@ -12,10 +12,13 @@ Ours: dt and the number of Fourier terms (measured against the exact answer: ``P
 which the notch's hinge then feeds), the notch's material contrast 1e-6 as the notched strip's.
 """
 
+from dataclasses import replace
+
+from . import notched_strip
 from .case import Case
 from .geometry import PRISM, Axis, Cutout, Pressure, Probe, Section, Support
 from .material import Material
-from .notched_strip import H, L, N_Z, NOTCH_X3, Z_PEPS_NOTCH
+from .notched_strip import H, L, N_Z, NOTCH_X3
 from .params import COMMON, MAX_STRESS, Spec
 
 NAME = "moving_load"
@@ -34,9 +37,9 @@ DEFAULTS = dict(
 SPECS = dict(
     COMMON,
     q=Spec(float, -MAX_STRESS, MAX_STRESS, help="patch pressure, Pa (default 1e6 elastic, 2e8 plastic)"),
-    notch_depth=Spec(float, 0.0, Z_PEPS_NOTCH, open_hi=True,
-                     help="notch depth at mid-span, m (0 = no notch, the default)"),
-    contrast=Spec(float, 0.0, 1.0, open_lo=True, help="stiffness and density factor of notch material"),
+    # the notched strip's notch, its bounds shared
+    notch_depth=replace(notched_strip.SPECS["notch_depth"], help="notch depth at mid-span, m (0 = no notch, the default)"),
+    contrast=notched_strip.SPECS["contrast"],
     speed=Spec(float, 1e-3, 1e5, help="the patch's speed along the span, m/s"),
 )
 PROVENANCE = dict(

@@ -382,12 +382,6 @@ def _size(Q: np.ndarray, terms: list[LoadTerm], t_end: float) -> float:
     return float(size)
 
 
-def covered_fourier(load, l: int, family: str, body: str, length: float, t) -> np.ndarray:
-    """``interval_fourier(load.intervals_at(t), l, family)`` for an array of times ``t`` (a
-    moving load is looked at on many thousand times per harmonic)."""
-    return interval_fourier(load.ends_at(t, body, length), l, family, body, length)
-
-
 def _moving_factor(load, l: int, body: str, length: float):
     """``t -> q g(t)`` times the x3 integral of harmonic ``l``'s basis function (U, W: ring cos,
     prism sin) over the intervals a moving pressure covers at ``t``."""
@@ -395,7 +389,7 @@ def _moving_factor(load, l: int, body: str, length: float):
     family = "cos" if body == RING else "sin"
 
     def factor(t):
-        value = load.q * np.asarray(g(t)) * covered_fourier(load, l, family, body, length, t)
+        value = load.q * np.asarray(g(t)) * interval_fourier(load.ends_at(t, body, length), l, family, body, length)
         return float(value) if np.ndim(value) == 0 else value
 
     return factor

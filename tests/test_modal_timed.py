@@ -14,7 +14,7 @@ from cases import get_case
 from cases.geometry import PRISM, Amplitude, Force, interval_fourier
 from cases.params import UnsupportedCase
 from reference_fem import modal
-from reference_fem.harmonic import HarmonicModel, covered_fourier, unsupported_reason
+from reference_fem.harmonic import HarmonicModel, unsupported_reason
 
 
 def _pulse_model(**sets) -> HarmonicModel:
@@ -133,7 +133,7 @@ def test_moving_factor_is_the_interval_integral_at_each_time():
     for l in (1, 2, 7, 60):
         scalar = [interval_fourier(load.intervals_at(t, PRISM, case.length), l, "sin", PRISM, case.length)
                   for t in times]
-        np.testing.assert_allclose(covered_fourier(load, l, "sin", PRISM, case.length, times), scalar,
+        np.testing.assert_allclose(interval_fourier(load.ends_at(times, PRISM, case.length), l, "sin", PRISM, case.length), scalar,
                                    rtol=0, atol=1e-15)
 
 

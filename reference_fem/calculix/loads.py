@@ -73,7 +73,8 @@ class Amplitudes:
 
 
 def refuse_early(case) -> None:
-    """What the loads' cards cannot carry, refused before the model is built."""
+    """What the loads' cards cannot carry, refused before the model is built (the one check:
+    :func:`pressure_cards`, :func:`moving_pressure` and :func:`force_cards` take it as made)."""
     for load in case.loads:
         _refuse_pressure(load)
     for term in case.forces:
@@ -99,7 +100,6 @@ def pressure_cards(case, model, faces, amplitudes: Amplitudes) -> list[str]:
     ``(element, face number)`` of boundary facets."""
     lines = []
     for i, load in enumerate(case.loads, 1):
-        _refuse_pressure(load)
         if load.moving:
             lines += [f"** load {i} moves at {load.speed:.13g} per s along x3: each facet under the fraction of it "
                       f"covered (LOAD{i}_<j>)"]
@@ -123,7 +123,6 @@ def moving_pressure(model, load, amplitudes: Amplitudes, prefix: str) -> list[tu
     (``MovingPressure.coverage``: a prism's clipping, a ring's wrap-around)."""
     from ..moving import MovingPressure
 
-    _refuse_pressure(load)
     try:
         unit = MovingPressure(model, load)
     except UnsupportedCase as err:
@@ -173,7 +172,6 @@ def force_cards(case, model, cells: np.ndarray, amplitudes: Amplitudes) -> list[
     fixed = np.zeros(model.basis.N, bool)
     fixed[model.fixed] = True
     for i, term in enumerate(case.forces, 1):
-        _refuse_force(term)
         _, F = model.force_vector(term)
         F = np.where(fixed, 0.0, F).reshape(-1, model.dim)
         F = serendipity_forces(F, cells, model.dim) * (CAX_CIRCUMFERENCE if model.rep == AXISYMMETRIC else 1.0)
