@@ -114,6 +114,41 @@ class _Spectral:
         self.at_b = np.array([leg.legval(1.0, c) for c in eye])
 
 
+def _weighted(a, b, w):
+    """``a' diag(w) b`` for per-point weights ``w``."""
+    return a.T @ (b * w[:, None])
+
+
+def ring_harmonic(s, l: int, lam, mu, rho):
+    """Stiffness and mass of harmonic ``l`` of a plane-strain ring, u_r = U(r) cos(l theta),
+    u_theta = V(r) sin(l theta), on the radial basis ``s`` (``phi``, ``dphi`` at its points
+    ``x`` with weights ``w``); ``lam``, ``mu``, ``rho`` a number or one per point (layers)."""
+    c = 2 * math.pi if l == 0 else math.pi
+    wr = s.w * s.x
+    Z = np.zeros_like(s.phi)
+    err = np.hstack([s.dphi, Z])
+    ett = np.hstack([s.phi, l * s.phi]) / s.x[:, None]
+    grt = np.hstack([-l * s.phi / s.x[:, None], s.dphi - s.phi / s.x[:, None]])
+    tr = err + ett
+    K = c * (_weighted(tr, tr, lam * wr) + 2 * (_weighted(err, err, mu * wr) + _weighted(ett, ett, mu * wr))
+             + _weighted(grt, grt, mu * wr))
+    m = _weighted(s.phi, s.phi, rho * wr)
+    return K, c * la.block_diag(m, m)
+
+
+def strip_harmonic(s, k: float, length: float, lam, mu, rho):
+    """Stiffness and mass of the harmonic ``k = l pi / length`` of a hinged plane-strain strip,
+    u2 = W(x2) sin(k x3), u3 = V(x2) cos(k x3), on the basis ``s`` through the height."""
+    e22 = np.hstack([s.dphi, np.zeros_like(s.phi)])
+    e33 = np.hstack([np.zeros_like(s.phi), -k * s.phi])
+    g23 = np.hstack([k * s.phi, s.dphi])
+    tr = e22 + e33
+    K = length / 2 * (lam * _weighted(tr, tr, s.w) + 2 * mu * (_weighted(e22, e22, s.w) + _weighted(e33, e33, s.w))
+                      + mu * _weighted(g23, g23, s.w))
+    m = rho * _weighted(s.phi, s.phi, s.w)
+    return K, length / 2 * la.block_diag(m, m)
+
+
 def _modal_steps(K, M, Q, rows, t):
     """Probe rows times the exact step response of ``M u'' + K u = Q`` from rest."""
     w2, phi = la.eigh(K, M)
@@ -128,22 +163,13 @@ def thick_cylinder_exact(case, t, harmonics=1280, p=50):
     r1, r2 = 1.0, 2.0
     s = _Spectral(r1, r2, p)
     n = p + 1
-    W = np.diag(s.w * s.x)
     out = np.zeros((3, t.size))
     patches = ((-math.pi / 4, math.pi / 4), (3 * math.pi / 4, 5 * math.pi / 4))
     for l in range(harmonics):
         f = sum(math.sin(l * b) - math.sin(l * a) for a, b in patches) / l if l else sum(b - a for a, b in patches)
         if abs(f) < 1e-9:
             continue
-        c = 2 * math.pi if l == 0 else math.pi
-        Z = np.zeros_like(s.phi)
-        err = np.hstack([s.dphi, Z])
-        ett = np.hstack([s.phi, l * s.phi]) / s.x[:, None]
-        grt = np.hstack([-l * s.phi / s.x[:, None], s.dphi - s.phi / s.x[:, None]])
-        tr = err + ett
-        K = c * (lam * tr.T @ W @ tr + 2 * mu * (err.T @ W @ err + ett.T @ W @ ett) + mu * grt.T @ W @ grt)
-        m = mat.rho * s.phi.T @ W @ s.phi
-        M = c * la.block_diag(m, m)
+        K, M = ring_harmonic(s, l, lam, mu, mat.rho)
         Q = np.concatenate([-case.params["q"] * f * r2 * s.at_b, np.zeros(n)])
         rows = np.array([np.concatenate([s.at_b, np.zeros(n)]),                              # A_ur
                          np.concatenate([np.zeros(n), s.at_b * math.sin(l * math.pi / 4)]),   # B_ut
@@ -161,20 +187,13 @@ def strip_exact(case, t, harmonics=640, p=40):
     L, h = case.length, 0.1
     s = _Spectral(0.0, h, p)
     n = p + 1
-    Wt = np.diag(s.w)
     out = np.zeros(t.size)
     for l in range(1, harmonics + 1):
         k = l * math.pi / L
         f = (1 - math.cos(l * math.pi)) / k
         if abs(f) < 1e-12:
             continue
-        e22 = np.hstack([s.dphi, np.zeros_like(s.phi)])
-        e33 = np.hstack([np.zeros_like(s.phi), -k * s.phi])
-        g23 = np.hstack([k * s.phi, s.dphi])
-        tr = e22 + e33
-        K = L / 2 * (lam * tr.T @ Wt @ tr + 2 * mu * (e22.T @ Wt @ e22 + e33.T @ Wt @ e33) + mu * g23.T @ Wt @ g23)
-        m = mat.rho * s.phi.T @ Wt @ s.phi
-        M = L / 2 * la.block_diag(m, m)
+        K, M = strip_harmonic(s, k, L, lam, mu, mat.rho)
         Q = np.concatenate([-case.params["q"] * f * s.at_b, np.zeros(n)])
         rows = np.concatenate([s.at_b * math.sin(l * math.pi / 2), np.zeros(n)])[None, :]
         out += _modal_steps(K, M, Q, rows, t)[0]

@@ -15,6 +15,7 @@ import scipy.linalg as la
 
 from cases import get_case
 from cases.moving_load import PATCH
+from tests.test_truth import ring_harmonic, strip_harmonic
 
 
 class _C0Spectral:
@@ -102,7 +103,6 @@ def layered_pulse_exact(case, t, harmonics=1280, p=30):
     lam = np.array([m.lame[0] for m in layers])[s.element]
     mu = np.array([m.lame[1] for m in layers])[s.element]
     rho = np.array([m.rho for m in layers])[s.element]
-    wr = s.w * s.x
     (t1, f1), (t2, f2), (t3, f3) = case.loads[0].amplitude.points
     kinks = [(t1, (f2 - f1) / (t2 - t1)), (t2, (f3 - f2) / (t3 - t2) - (f2 - f1) / (t2 - t1)), (t3, -(f3 - f2) / (t3 - t2))]
     out = np.zeros((4, t.size))
@@ -111,16 +111,7 @@ def layered_pulse_exact(case, t, harmonics=1280, p=30):
         f = sum(math.sin(l * b) - math.sin(l * a) for a, b in patches) / l if l else sum(b - a for a, b in patches)
         if abs(f) < 1e-9:
             continue
-        c = 2 * math.pi if l == 0 else math.pi
-        Z = np.zeros_like(s.phi)
-        err = np.hstack([s.dphi, Z])
-        ett = np.hstack([s.phi, l * s.phi]) / s.x[:, None]
-        grt = np.hstack([-l * s.phi / s.x[:, None], s.dphi - s.phi / s.x[:, None]])
-        tr = err + ett
-        K = c * (tr.T @ (tr * (lam * wr)[:, None]) + 2 * (err.T @ (err * (mu * wr)[:, None]) + ett.T @ (ett * (mu * wr)[:, None]))
-                 + grt.T @ (grt * (mu * wr)[:, None]))
-        m = s.phi.T @ (s.phi * (rho * wr)[:, None])
-        M = c * la.block_diag(m, m)
+        K, M = ring_harmonic(s, l, lam, mu, rho)
         zero = np.zeros(s.n)
         Q = np.concatenate([-case.loads[0].q * f * r2 * s.at(r2), zero])
         rows = np.array([np.concatenate([s.at(r2), zero]),                              # A_ur
@@ -140,19 +131,11 @@ def moving_strip_exact(case, t, harmonics=640, p=40):
     lam, mu = case.material.lame
     L, h, q, v = case.length, 0.1, case.loads[0].q, case.loads[0].speed
     s = _C0Spectral([0.0, h], p)
-    w = s.w
     out = np.zeros((2, t.size))
     ends = {"front": (0.0, L / v, 0.0), "rear": (PATCH / v, (L + PATCH) / v, -PATCH)}  # its x3 = v t + shift
     for l in range(1, harmonics + 1):
         k = l * math.pi / L
-        e22 = np.hstack([s.dphi, np.zeros_like(s.phi)])
-        e33 = np.hstack([np.zeros_like(s.phi), -k * s.phi])
-        g23 = np.hstack([k * s.phi, s.dphi])
-        tr = e22 + e33
-        K = L / 2 * (lam * tr.T @ (tr * w[:, None]) + 2 * mu * (e22.T @ (e22 * w[:, None]) + e33.T @ (e33 * w[:, None]))
-                     + mu * g23.T @ (g23 * w[:, None]))
-        m = case.material.rho * s.phi.T @ (s.phi * w[:, None])
-        M = L / 2 * la.block_diag(m, m)
+        K, M = strip_harmonic(s, k, L, lam, mu, case.material.rho)
         Q = np.concatenate([-q / k * s.at(h), np.zeros(s.n)])  # per unit of (cos k a - cos k b)
         rows = np.array([np.concatenate([s.at(h) * math.sin(k * x3), np.zeros(s.n)]) for x3 in (L / 2, L / 4)])
         pieces = []
