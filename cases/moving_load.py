@@ -8,8 +8,10 @@ face, moving from x3 = 0 towards x3 = L at 1000 m/s: at time t it covers
 [1000 t - 0.03, 1000 t] within [0, L] (it enters the strip over the first 3e-5 s and leaves it
 at 3.3e-4 s); t_end = 6e-4 s; probes ``mid_uz`` (u_2 on the top face at mid-span) and ``q_uz``
 (at x3 = L / 4).
-Ours: dt and the number of Fourier terms (measured against the exact answer: ``PROVENANCE``), the plastic load q = 2e8 Pa (the patch's own local yield under its edges,
-which the notch's hinge then feeds), the notch's material contrast 1e-6 as the notched strip's.
+Ours: dt and the number of Fourier terms (measured against the exact answer: ``PROVENANCE``), the plastic load q = 1e8 Pa (the notch's corners
+yield as the patch passes, peps_max 0.8 % at refine 2; at 2e8 the ligament collapses, strains
+reach 9 % at refine 4, past the small-strain model's 5 %), the notch's material contrast 1e-6
+as the notched strip's.
 """
 
 from dataclasses import replace
@@ -28,15 +30,21 @@ TITLE = "Hinged strip under a pressure patch moving along the span at 1000 m/s (
 NOTCHED_NAME = "moving_load_notched"
 NOTCHED = {"notch_depth": 0.025, "plastic": True}
 PATCH, SPEED = 0.03, 1000.0
-Q_ELASTIC, Q_PLASTIC = 1.0e6, 2.0e8
+Q_ELASTIC, Q_PLASTIC = 1.0e6, 1.0e8
+#: Fourier terms: the smooth patch's, and with a notch (a 25 mm cut-out of contrast 1e-6 is a
+#: step in the stiffness along the span: the notched strip's 120; at 60 the elastic notched
+#: scene's deflections are 27 % from the explicit 2D reference at refine 2, at 120 2.2 %)
+HARMONICS, HARMONICS_NOTCHED = 60, 120
 
 DEFAULTS = dict(
-    dt=2e-6, t_end=6e-4, refine=1, harmonics=60, E=2.1e11, nu=0.3, rho=7.8e3, tau_s=1.7e8,
+    dt=2e-6, t_end=6e-4, refine=1, harmonics=None, E=2.1e11, nu=0.3, rho=7.8e3, tau_s=1.7e8,
     plastic=False, tol=1e-5, dim=2, q=None, notch_depth=0.0, contrast=1e-6, speed=SPEED,
 )
 SPECS = dict(
     COMMON,
-    q=Spec(float, -MAX_STRESS, MAX_STRESS, help="patch pressure, Pa (default 1e6 elastic, 2e8 plastic)"),
+    harmonics=replace(COMMON["harmonics"], help=f"number of Fourier terms kept (default {HARMONICS}, "
+                                                f"{HARMONICS_NOTCHED} with a notch)"),
+    q=Spec(float, -MAX_STRESS, MAX_STRESS, help="patch pressure, Pa (default 1e6 elastic, 1e8 plastic)"),
     # the notched strip's notch, its bounds shared
     notch_depth=replace(notched_strip.SPECS["notch_depth"], help="notch depth at mid-span, m (0 = no notch, the default)"),
     contrast=notched_strip.SPECS["contrast"],
@@ -47,12 +55,14 @@ PROVENANCE = dict(
     "probes mid_uz and q_uz, notch_depth as the notched strip's",
     ours="dt = 2e-6 s and 60 Fourier terms (total error 0.24 / 0.35 % on mid_uz / q_uz against the exact answer "
     "of tests/test_truth_timed.py; 120 terms at dt / 2: 0.17 / 0.16 %; benchmarks/moving_load_settings.py against "
-    "the stored truth), the plastic load 2e8 Pa, contrast 1e-6, element width across the plane-strain width, tol",
+    "the stored truth), the plastic load 1e8 Pa (valid: at 2e8 strains pass 5 %), contrast 1e-6, element width across the plane-strain width, tol",
 )
 
 
 def build(p: dict) -> Case:
-    p = dict(p, q=p["q"] if p["q"] is not None else (Q_PLASTIC if p["plastic"] else Q_ELASTIC))
+    notched = p["notch_depth"] > 0
+    p = dict(p, q=p["q"] if p["q"] is not None else (Q_PLASTIC if p["plastic"] else Q_ELASTIC),
+             harmonics=p["harmonics"] or (HARMONICS_NOTCHED if notched else HARMONICS))
     dz = H / N_Z
     section = Section(
         "rect", s=Axis((0.0, dz), (1,), refinable=False), t=Axis((0.0, H), (N_Z,)),

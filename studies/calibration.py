@@ -54,11 +54,11 @@ def second_plan(name: str, main: TruthPlan) -> TruthPlan:
     if main.method == EXPLICIT_TRUTH and get_case(name).wall is not None:
         # the rod: implicit Newmark with exact (Lagrange multiplier) contact on a massless face
         return TruthPlan(TIME_TRUTH, refine=(4, 8), dt_divisors=(1, 2, 4, 8), solver=REF2D)
-    if main.method == EXPLICIT_TRUTH:  # plastic scenes: the other element (B-bar or standard)
+    if main.method == EXPLICIT_TRUTH:  # plastic scenes: the other element (B-bar or standard), same meshes
         options = dict(main.options)
         options["bbar"] = not options.get("bbar", False)
         return TruthPlan(EXPLICIT_TRUTH, solver=EXPLICIT, dim=main.dim, options=tuple(sorted(options.items())),
-                         **ladder)
+                         refine=main.refine, check=main.check, output_divisor=main.output_divisor)
     raise ValueError(f"no second truth path for a {main.method!r} truth")
 
 
