@@ -359,7 +359,7 @@ def full() -> tuple[CaseStudy, ...]:
             _s(SMFEM_QUAD9, *grid("moving_load_notched", ({"harmonics": 120}, {"harmonics": 240}, {"harmonics": 480}),
                                   (1, 2))),
             _s(REF2D, *grid("moving_load_notched", _r(1), (1, 2, 4)), *grid("moving_load_notched", _r(2), (1, 2)),
-               {"refine": 4}),
+               {"refine": 3}),
             _s(REF3D, *grid("moving_load_notched", _r(1), (1,))),
         ), reference=(REF2D, {"refine": 3}),
             truth=explicit_truth(MOVING_NOTCHED_LADDER, bbar=True)),
