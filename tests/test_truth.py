@@ -395,7 +395,7 @@ def test_explicit_plans_and_their_second_paths():
 
 # -- stored truths ---------------------------------------------------------------------------------
 SCENES = ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact", "layered_cylinder", "flywheel",
-          "layered_cylinder_pulse")
+          "layered_cylinder_pulse", "moving_load", "moving_load_notched")
 
 
 def _stored(name):
