@@ -8,10 +8,10 @@ face, moving from x3 = 0 towards x3 = L at 1000 m/s: at time t it covers
 [1000 t - 0.03, 1000 t] within [0, L] (it enters the strip over the first 3e-5 s and leaves it
 at 3.3e-4 s); t_end = 6e-4 s; probes ``mid_uz`` (u_2 on the top face at mid-span) and ``q_uz``
 (at x3 = L / 4).
-Ours: dt and the number of Fourier terms (measured against the exact answer: ``PROVENANCE``), the plastic load q = 1e8 Pa (the notch's corners
-yield as the patch passes, peps_max 0.8 % at refine 2; at 2e8 the ligament collapses, strains
-reach 9 % at refine 4, past the small-strain model's 5 %), the notch's material contrast 1e-6
-as the notched strip's.
+Ours: dt and the number of Fourier terms (measured against the exact answer: ``PROVENANCE``),
+the plastic load q = 1e8 Pa (the notch's corners yield as the patch passes, peps_max 0.8 % at
+refine 2; at 2e8 the ligament collapses, strains reach 9 % at refine 4, past the small-strain
+model's 5 %), the notch's material contrast 1e-6 as the notched strip's.
 """
 
 from dataclasses import replace

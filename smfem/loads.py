@@ -33,8 +33,12 @@ def pressure_x3_amplitude(load, mode: Mode, body: str, length: float) -> float:
     """``int q(x3) psi1(x3) dx3`` of a pressure for one mode (exact)."""
     if load.mode is not None:
         return load.q * psi_squared_integrals(mode, body, length)[0] if mode.l == load.mode else 0.0
-    family = "sin" if (body == PRISM or mode.family == "s") else "cos"
-    return load.q * interval_fourier(load.x3_intervals, mode.l, family, body, length)
+    return load.q * interval_fourier(load.x3_intervals, mode.l, psi1_family(mode, body), body, length)
+
+
+def psi1_family(mode: Mode, body: str) -> str:
+    """The family of a mode's in-plane basis function ``psi1`` along x3: a prism's is the sine."""
+    return "sin" if (body == PRISM or mode.family == "s") else "cos"
 
 
 def load_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode, np.ndarray]:
@@ -52,7 +56,7 @@ def load_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode, np
 
 
 class TimedLoad:
-    """A load whose share of each mode varies in time: ``factors(t)[i] * shapes[modes[i]]``.
+    """A load whose share of each mode varies in time: ``factors_of(modes)(t)[i] * shapes[modes[i]]``.
 
     A force term or a pressure with an amplitude keeps its place: one factor, ``g(t)``, for
     every mode. A moving pressure's share of mode m is ``g(t) int q psi1_m`` over the intervals
@@ -63,19 +67,25 @@ class TimedLoad:
     def __init__(self, shapes: dict[Mode, np.ndarray], factor, pressure=None, body: str = "", length: float = 0.0):
         self.shapes, self.factor, self.pressure, self.body, self.length = shapes, factor, pressure, body, length
 
-    def factors(self, t: float, modes: list[Mode]) -> np.ndarray:
-        g = float(self.factor(t))
+    def factors_of(self, modes: list[Mode]):
+        """``t -> factors`` (len(modes),) at time t: the modes' harmonic numbers and families
+        taken once, not at every step."""
         if self.pressure is None:
-            return np.full(len(modes), g)
+            return lambda t: np.full(len(modes), float(self.factor(t)))
         l = np.array([m.l for m in modes])
-        sine = np.array([self.body == PRISM or m.family == "s" for m in modes])  # psi1's family
-        ends = self.pressure.ends_at(t, self.body, self.length)
-        shares = [interval_fourier(ends, l, family, self.body, self.length) for family in ("cos", "sin")]
-        return g * self.pressure.q * np.where(sine, shares[1], shares[0])
+        sine = np.array([psi1_family(m, self.body) == "sin" for m in modes])
+        q, body, length = self.pressure.q, self.body, self.length
+
+        def at(t: float) -> np.ndarray:
+            ends = self.pressure.ends_at(t, body, length)
+            cos, sin = (interval_fourier(ends, l, family, body, length) for family in ("cos", "sin"))
+            return float(self.factor(t)) * q * np.where(sine, sin, cos)
+        return at
 
     def largest(self, modes: list[Mode], times: np.ndarray) -> np.ndarray:
         """Per mode, the largest magnitude of its load at ``times`` (which modes a load reaches)."""
-        peak = np.abs(np.array([self.factors(t, modes) for t in times])).max(axis=0)
+        at = self.factors_of(modes)
+        peak = np.abs(np.array([at(t) for t in times])).max(axis=0)
         return peak * np.array([np.abs(self.shapes[m]).max() for m in modes])
 
 

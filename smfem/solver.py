@@ -62,7 +62,7 @@ def force_terms(case, model: Model) -> list:
 
 
 def _stacked_term(model: Model, k: int, term):
-    """``t -> S @ factors(t)``: column i of ``S`` is mode i's reduced vector in its own rows."""
+    """``t -> S @ factors(t)`` (:meth:`smfem.loads.TimedLoad.factors_of`): column i of ``S`` is mode i's reduced vector in its own rows."""
     blocks = [s.Q_terms[k] for s in model.systems]
     if term.pressure is None:  # one factor for every mode
         Q = np.concatenate(blocks)
@@ -71,7 +71,8 @@ def _stacked_term(model: Model, k: int, term):
     cols = np.repeat(np.arange(len(blocks)), np.diff(model.offsets))
     S = sp.csr_matrix((np.concatenate(blocks), (rows, cols)), shape=(int(model.offsets[-1]), len(blocks)))
     S.eliminate_zeros()
-    return lambda t: S @ term.factors(t, model.modes)
+    factors = term.factors_of(model.modes)
+    return lambda t: S @ factors(t)
 
 
 def solve(case, options: SolverOptions | None = None, progress=None, with_fields: bool = True,
