@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from .geometry import PRISM, RING, Force, Cutout, Motion, InitialVelocity, Pressure, Probe, Region, Section, Support, Wall
+from .geometry import PRISM, RING, ContactPair, Force, Cutout, Motion, InitialVelocity, Pressure, Probe, Region, Section, Support, Wall
 from .material import Material
 
 
@@ -18,6 +18,9 @@ class Case:
     body : ``'ring'`` or ``'prism'`` (see :mod:`cases.geometry` for coordinates)
     section : cross-section block with the paper's mesh counts (before ``refine``)
     material : the material of the section outside ``regions``
+    contacts : pairs of faces of two bodies that meet through the contact layer
+        (:class:`cases.geometry.ContactPair`; the section then holds several bodies,
+        :mod:`cases.bodies`)
     regions : parts of the section of other materials (:class:`cases.geometry.Region`), none
         overlapping; :attr:`materials` and :meth:`material_index` give every element's
     length : prism length along x3 (ring: 2 pi)
@@ -54,6 +57,7 @@ class Case:
     symmetric: bool = True
     axisymmetric: bool = False
     regions: tuple[Region, ...] = ()
+    contacts: tuple[ContactPair, ...] = ()
     units: str = "SI (m, N, s, Pa, kg/m^3)"
     provenance: dict = field(default_factory=dict)
     references: dict = field(default_factory=dict)
@@ -73,6 +77,22 @@ class Case:
 
             raise UnsupportedCase(f"{self.name}: region {missing!r} names a physical surface, which this section "
                                   f"has not (a mapped block has none: give the region s_range and t_range)")
+        unknown = next((v for v in self.initial_velocity if v.region is not None and v.region not in surfaces), None)
+        if unknown is not None:
+            from .params import UnsupportedCase
+
+            raise UnsupportedCase(f"{self.name}: an initial velocity is given to region {unknown.region!r}, which the "
+                                  f"section has not (its regions: {', '.join(surfaces) or 'none'})")
+        unknown = next((p for p in self.probes if p.region is not None and p.region not in surfaces), None)
+        if unknown is not None:
+            from .params import UnsupportedCase
+
+            raise UnsupportedCase(f"{self.name}: probe {unknown.name!r} averages over region {unknown.region!r}, which "
+                                  f"the section has not (its regions: {', '.join(surfaces) or 'none'})")
+        if self.contacts:
+            from .bodies import check_pairs
+
+            check_pairs(self)
 
     def variation_factor(self, x3):
         """``1 + sum a cos(m k x3)`` at ``x3`` (1 without a variation)."""

@@ -275,10 +275,12 @@ class Support:
 
 @dataclass(frozen=True)
 class InitialVelocity:
-    """Uniform initial velocity ``value`` of displacement component ``component``."""
+    """Uniform initial velocity ``value`` of displacement component ``component``: of the whole
+    section, or of one body (region) when ``region`` names it."""
 
     component: int
     value: float
+    region: str | None = None
 
 
 @dataclass(frozen=True)
@@ -304,6 +306,24 @@ class Wall:
 
 
 @dataclass(frozen=True)
+class ContactPair:
+    """Two bodies' faces that meet through the contact layer (paper (17)-(19)): ``face`` of one
+    body and ``other`` of another, section edges named ``'body.edge'`` (:mod:`cases.bodies`).
+
+    The initial gap at every point is the geometric distance between the two faces along the
+    outward normal of ``face`` (zero where they touch, a clearance where they are apart, negative
+    where they overlap); ``interference`` (length) is the overlap the scene states (a shrink
+    fit): faces overlapping by more are refused (:func:`cases.bodies.check_pairs`). Coulomb
+    ``friction``; no adhesion: the layer carries no normal tension.
+    """
+
+    face: str
+    other: str
+    friction: float = 0.0
+    interference: float = 0.0
+
+
+@dataclass(frozen=True)
 class Probe:
     """A recorded quantity.
 
@@ -311,7 +331,8 @@ class Probe:
         ``'point'``: ``field`` component at section point ``(x1, x2)`` and ``x3``;
         ``'max'``: maximum of ``field`` over the body;
         ``'edge_mean'``: mean of ``field`` component over the face ``edge`` (area-weighted);
-        ``'body_mean'``: mean over the volume (mass-weighted).
+        ``'body_mean'``: mean over the volume (mass-weighted), over one body or region when
+        ``region`` names it.
     field
         ``'u'`` (displacement, m or in), ``'v'`` (velocity), ``'sigma'`` (stress), ``'peps'``
         (equivalent plastic strain sqrt(2/3 eps_p:eps_p)).
@@ -326,6 +347,7 @@ class Probe:
     component: tuple = ()
     point: tuple[float, float, float] | None = None
     edge: str | None = None
+    region: str | None = None
 
 
 def interval_fourier(intervals, l, family: str, body: str, length: float = 2 * math.pi):

@@ -4,15 +4,20 @@ free vibration far beyond it, and the conditioning of a harmonic's stiffness."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import scipy.sparse.linalg as sla
 
 from .model import Model
-from .newmark import LinearSystem, march
-from .probes import ProbeSet
-from .solver import stacked
+from .newmark import LinearSystem, State, march
+from .options import SolverOptions
+from .probes import CaseProbes, ProbeSet
+from .solver import build_system, stacked
+
+#: the time step of a static contact solve, times the case's: inertia far below the stiffness
+STATIC_DT_FACTOR = 1e6
 
 
 def static_probes(case, element: str | None = None) -> dict:
@@ -23,6 +28,20 @@ def static_probes(case, element: str | None = None) -> dict:
     u = sla.spsolve(K.tocsc(), Q)
     probes = ProbeSet(model, case.probes)
     return dict(zip(probes.names, probes.evaluate(u, u)))
+
+
+def contact_static_probes(case, options: SolverOptions | None = None) -> dict:
+    """The static solution of a case with contact under its held loads: one step of the contact
+    system (the layer's states iterated as in any step) with a time step so long that inertia
+    is negligible (``a0 M`` about 1e-12 of ``K`` at the rod's sizes) and nothing moving before
+    it: probe name -> value."""
+    long = dataclasses.replace(case, params={**case.params, "dt": STATIC_DT_FACTOR * case.dt})
+    model, system, _ = build_system(long, options or SolverOptions())
+    zero = np.zeros(model.n_dof)
+    system.initial_acceleration(zero)
+    u, _ = system.solve(zero, zero, 1, long.dt)
+    state = State(1, u, zero, zero)
+    return dict(zip(CaseProbes(long, model, system).names, CaseProbes(long, model, system).values(state, system)))
 
 
 def explicit_limit(case) -> tuple[float, list[float]]:

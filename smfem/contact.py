@@ -66,6 +66,7 @@ from typing import NamedTuple
 import numpy as np
 import scipy.sparse as sp
 
+from cases.bodies import pair_faces
 from cases.geometry import RING
 
 from . import element, fourier, quad9
@@ -81,6 +82,10 @@ OPEN, STICK, SLIP = 0, 1, 2
 NORMAL = 1  # strain row e22: normal to the layer
 SHEAR = [3, 5]  # g12 (tangential in the section plane) and g23 (tangential along x3)
 TRACTION = [NORMAL] + SHEAR  # the only rows that carry stress in the layer
+#: a layer point closed by less than this strain (1e-14 m across a 0.1 mm layer) is open: where
+#: two faces just touch at the end of a step, round-off would otherwise flip their points
+#: between open and closed for ever
+CLOSURE_TOL = 1e-10
 #: the smallest share of a step towards the next iterate before a cycle counts as chattering
 MIN_RELAXATION = 1.0 / 16
 #: a slip direction that moves less than this between iterations has settled
@@ -123,7 +128,7 @@ def layer_states(strain: np.ndarray, pre_closure: np.ndarray, slip: np.ndarray, 
     size = np.linalg.norm(tau, axis=-1)
     limit = f * np.abs(sigma_n)
     kind = np.where((f > 0) & (size <= limit), STICK, SLIP)
-    kind = np.where(closure >= 0, OPEN, kind)
+    kind = np.where(closure >= -CLOSURE_TOL, OPEN, kind)
     slipping = (kind == SLIP) & (size > 0) & (f > 0)  # without friction no direction
     safe = np.where(slipping, size, 1.0)
     direction = np.where(slipping[..., None], tau / safe[..., None], 0.0)
@@ -183,6 +188,10 @@ class LayerPoints(NamedTuple):
     B: np.ndarray
     weight: np.ndarray
     r: np.ndarray
+    #: (n_points, m): the face's shape functions at each point, on the segment's nodes in order
+    N: np.ndarray
+    #: the far side's nodes (its segment's, in order) of ``B``'s first columns when ``far``
+    far_columns: np.ndarray
 
 
 def segment_normals(x_seg: np.ndarray, centres: np.ndarray) -> np.ndarray:
@@ -197,11 +206,12 @@ def segment_normals(x_seg: np.ndarray, centres: np.ndarray) -> np.ndarray:
     return normal * -np.sign(np.einsum("eja,ea->ej", normal, inward))[..., None]
 
 
-def moment_layer(x_seg: np.ndarray, wall_seg: np.ndarray, wavenumbers) -> LayerPoints:
+def moment_layer(x_seg: np.ndarray, wall_seg: np.ndarray, wavenumbers, far: bool = False) -> LayerPoints:
     """4-node moment-scheme layer elements on 2-node face segments (a 4-node body's face).
 
     Two points per element, the Gauss points along the face: the layer's stresses vary only
     along it, and ``a^2 = 1/12`` makes their mean of ``B' D B`` the moment scheme's stiffness.
+    ``far``: keep the far side's columns (another body's face), else the face's only (a wall).
     """
     # xi along the face, eta from the wall to the face
     X = np.stack([wall_seg[:, 0], wall_seg[:, 1], x_seg[:, 1], x_seg[:, 0]], axis=1)
@@ -209,11 +219,12 @@ def moment_layer(x_seg: np.ndarray, wall_seg: np.ndarray, wavenumbers) -> LayerP
     n_e = len(x_seg)
     elements_of = np.repeat(np.arange(n_e), 2)
     xi = np.tile([-GAUSS_A, GAUSS_A], n_e)
-    B = np.stack([(B0[elements_of] + xi[:, None, None] * B1[elements_of])[..., 6:]
-                  for B0, B1, _ in (ops.at(p) for p in wavenumbers)])  # local nodes 2, 3: the face
-    r0, r1 = x_seg[:, 0, 0], x_seg[:, 1, 0]
-    r = 0.5 * (r0 + r1)[elements_of] + xi * (r1 - r0)[elements_of]
-    return LayerPoints(elements_of, np.array([1, 0]), B, 0.5 * ops.sqrt_g[elements_of], r)
+    first = 0 if far else 6  # local nodes 0, 1: the far side; 2, 3: the face
+    B = np.stack([(B0[elements_of] + xi[:, None, None] * B1[elements_of])[..., first:]
+                  for B0, B1, _ in (ops.at(p) for p in wavenumbers)])
+    N = np.column_stack([0.5 - xi, 0.5 + xi])  # xi runs from the face's node 0 to its node 1
+    r = np.einsum("pn,pn->p", N, x_seg[elements_of, :, 0])
+    return LayerPoints(elements_of, np.array([1, 0]), B, 0.5 * ops.sqrt_g[elements_of], r, N, np.array([0, 1]))
 
 
 def layer6_shape_functions(xi, eta):
@@ -227,14 +238,15 @@ def layer6_shape_functions(xi, eta):
             np.concatenate([-L, L], axis=-1))
 
 
-def quadratic_layer(x_seg: np.ndarray, wall_seg: np.ndarray, wavenumbers) -> LayerPoints:
+def quadratic_layer(x_seg: np.ndarray, wall_seg: np.ndarray, wavenumbers, far: bool = False) -> LayerPoints:
     """6-node layer elements on 3-node face segments (a 9-node body's face): the face's own
     quadratic interpolation, linear across the layer, its strain taken at mid-thickness at the 3
     Gauss points along the face (exact for the products of quadratics on a straight face; 2
     points would leave a face pattern that no point feels) in the frame of the face there."""
     X = np.concatenate([wall_seg, x_seg], axis=1)  # (n_seg, 6, 2)
     n_e, n_g = len(x_seg), len(quad9.GAUSS_1D)
-    B, weight, r = [], [], []
+    first = 0 if far else 9  # the far side's 3 nodes, then the face's
+    B, weight, r, N_face = [], [], [], []
     for g, xi in enumerate(quad9.GAUSS_1D):
         N, dxi, deta = layer6_shape_functions(xi, 0.0)
         t1, t2 = np.einsum("i,eia->ea", dxi, X), np.einsum("i,eia->ea", deta, X)
@@ -242,14 +254,43 @@ def quadratic_layer(x_seg: np.ndarray, wall_seg: np.ndarray, wavenumbers) -> Lay
         across = np.column_stack([-along[:, 1], along[:, 0]])
         frame = strain_rotation(np.stack([along, across], axis=1))
         strains = (strain_operator(X, RING, p, xi, 0.0, layer6_shape_functions) for p in wavenumbers)
-        B.append([np.einsum("ers,esk->erk", frame, b)[..., 9:] for b in strains])  # the face's 3 nodes
+        B.append([np.einsum("ers,esk->erk", frame, b)[..., first:] for b in strains])
         area = np.abs(t1[:, 0] * t2[:, 1] - t1[:, 1] * t2[:, 0])
         weight.append(area * (X[:, :, 0] @ N) * quad9.WEIGHTS_1D[g])
-        r.append(x_seg[:, :, 0] @ quad9.lagrange_1d(xi)[0])
+        L = quad9.lagrange_1d(xi)[0]
+        r.append(x_seg[:, :, 0] @ L)
+        N_face.append(np.broadcast_to(L, (n_e, 3)))
     # points element-major, as the moment layer's: element e's at e n_g ... e n_g + n_g - 1
-    B = np.stack(B, axis=2).reshape(len(wavenumbers), n_e * n_g, 6, 9)
-    return LayerPoints(np.repeat(np.arange(n_e), n_g), np.arange(3), B,
-                       np.stack(weight, axis=1).ravel(), np.stack(r, axis=1).ravel())
+    B = np.stack(B, axis=2).reshape(len(wavenumbers), n_e * n_g, 6, 18 - first)
+    return LayerPoints(np.repeat(np.arange(n_e), n_g), np.arange(3), B, np.stack(weight, axis=1).ravel(),
+                       np.stack(r, axis=1).ravel(), np.stack(N_face, axis=1).reshape(-1, 3), np.arange(3))
+
+
+class LayerSide(NamedTuple):
+    """One face the layer lies on: the wall's (``other`` empty, ``across`` None) or a contact
+    pair's ``edge``, with ``across`` (n_nodes,) the node of the ``other`` face across each of its
+    nodes and ``gap`` (n_nodes,) the initial gap there (:func:`cases.bodies.pair_faces`)."""
+
+    edge: str
+    other: str
+    friction: float
+    across: np.ndarray | None = None
+    gap: np.ndarray | None = None
+
+
+def layer_sides(case, mesh) -> list[LayerSide]:
+    """The faces of a case's contact layer: the wall's, or one per contact pair."""
+    if case.wall is not None:
+        return [LayerSide(case.wall.edge, "", float(case.wall.friction))]
+    sides = []
+    for pair in case.contacts:
+        pairing = pair_faces(mesh, pair)
+        across = np.full(mesh.n_nodes, -1)
+        across[pairing.face] = pairing.other
+        gap = np.zeros(mesh.n_nodes)
+        gap[pairing.face] = pairing.gap
+        sides.append(LayerSide(pair.face, pair.other, float(pair.friction), across, gap))
+    return sides
 
 
 class ContactError(StepFailed):
@@ -279,45 +320,39 @@ class ContactLayer:
         if model.coupling:
             raise ModelError(f"{case.name}: contact with material varying along x3 (cut-outs) is not supported")
         self.model, self.h, self.E, self.G = model, float(thickness), float(stiffness), 0.5 * float(stiffness)
-        wall = case.wall
-        self.f = float(wall.friction)
-        mesh = model.mesh
-        face = mesh.edge_nodes(wall.edge)
-        seg, owner = mesh.edge_segments(wall.edge)
-        x = mesh.x
-        # the wall side of the layer: every face node moved by h along the face's outward
-        # normal there (the mean of its segments' normals at a shared corner)
-        row_of = np.full(mesh.n_nodes, -1)
-        row_of[face] = np.arange(len(face))
-        position = row_of[seg]  # (n_seg, nodes per segment): each segment node's place in face
-        normal = segment_normals(x[seg], mesh.element_x()[owner].mean(axis=1))
-        out_node = np.zeros((len(face), 2))
-        np.add.at(out_node, position, normal)
-        out_node /= np.linalg.norm(out_node, axis=1, keepdims=True)
-        wall_x = x[face] + self.h * out_node
+        if case.wall is not None and case.contacts:
+            raise ModelError(f"{case.name}: a rigid wall and contact pairs in one scene are not supported yet")
         l_max = max(m.l for m in model.modes)
-        if l_max == 0 and wall.slope:
+        if l_max == 0 and case.wall is not None and case.wall.slope:
             raise ModelError(f"{case.name}: a tilted wall (wall_slope > 0) makes the contact vary around "
                              f"the circumference: set harmonics >= 2")
-        build = moment_layer if mesh.order == 1 else quadratic_layer
-        points = build(x[seg], wall_x[position], [float(m.l) for m in model.modes])
-        self.n_elements, self.element, self.B = len(seg), points.element, points.B
-        nodes = seg[points.element][:, points.columns]  # (n_points, m) in the order of B's columns
-        dofs = (3 * nodes[:, :, None] + np.arange(3)).reshape(len(nodes), -1)
-        self.F = np.unique(dofs)
-        self.local = np.searchsorted(self.F, dofs)  # (n_points, 3 m) positions in F
-        self.C = [s.T[self.F].tocsr() for s in model.systems]  # face dofs <- reduced, per mode
-        self.offsets = np.cumsum([0] + [s.T.shape[1] for s in model.systems])
         # points along x3 and the basis of every mode and strain row there
         n_x3 = 1 if l_max == 0 else points_per_harmonic * (l_max + 1)
         self.x3 = 2 * math.pi * np.arange(n_x3) / n_x3
         self.w = np.full(n_x3, 2 * math.pi / n_x3)
         self.psi = np.stack([np.where(fourier.ROW_TYPE == 0, *(v[:, None] for v in fourier.psi(m, self.x3, RING, 0.0)))
                              for m in model.modes])  # (n_modes, n_x3, 6)
-        # (n_points, n_x3)
-        self.gap = wall.gap_at(points.r[:, None] * np.cos(self.x3)[None, :], x[face, 0].max())
+        specs = layer_sides(case, model.mesh)
+        sides = [self._side(spec) for spec in specs]  # (points, nodes, gap) of each
+        #: the side (the wall, or a pair: :func:`layer_sides`) of every point
+        self.side = np.concatenate([np.full(len(p.element), k) for k, (p, _, _) in enumerate(sides)])
+        self.side_edges = [(spec.edge,) + ((spec.other,) if spec.other else ()) for spec in specs]
+        counts = np.cumsum([0] + [len(model.mesh.edge_segments(spec.edge)[0]) for spec in specs])
+        self.n_elements = int(counts[-1])
+        self.element = np.concatenate([p.element + c for (p, _, _), c in zip(sides, counts)])
+        self.B = np.concatenate([p.B for p, _, _ in sides], axis=1)
+        nodes = np.concatenate([n for _, n, _ in sides])  # (n_points, m) in the order of B's columns
+        self.gap = np.concatenate([g for _, _, g in sides])  # (n_points, n_x3)
+        self.f = np.concatenate([np.full((len(p.element), 1), spec.friction) for (p, _, _), spec in zip(sides, specs)])
+        #: every edge the layer lies on or against (their nodes are massless, :func:`face_free_mass`)
+        self.layer_edges = tuple(e for edges in self.side_edges for e in edges)
+        dofs = (3 * nodes[:, :, None] + np.arange(3)).reshape(len(nodes), -1)
+        self.F = np.unique(dofs)
+        self.local = np.searchsorted(self.F, dofs)  # (n_points, 3 m) positions in F
+        self.C = [s.T[self.F].tocsr() for s in model.systems]  # face dofs <- reduced, per mode
+        self.offsets = np.cumsum([0] + [s.T.shape[1] for s in model.systems])
         self.pre_closure = self.gap / self.h  # the gap as a normal pre-strain
-        self.area = points.weight[:, None] * self.w[None, :]  # quadrature weight of every point
+        self.area = np.concatenate([p.weight for p, _, _ in sides])[:, None] * self.w[None, :]
         shape = (len(self.element), n_x3)
         self.slip_strain = np.zeros(shape + (2,))  # committed tangential slip per point
         self.states = LayerStates(np.full(shape, OPEN), np.zeros(shape + (2,)), np.zeros(shape))
@@ -327,6 +362,34 @@ class ContactLayer:
         self._rows = R.ravel()  # position in the stacked face vector of every point's dofs
         self._scatter = (R[:, None, :, :, None] * (n_modes * nF) + R[None, :, :, None, :]).ravel()
         self.size = n_modes * nF
+
+    def _side(self, spec: "LayerSide") -> tuple[LayerPoints, np.ndarray, np.ndarray]:
+        """The layer elements on one face: their points, the nodes of ``B``'s columns at each
+        point (the far side's first between two bodies) and the initial gap there (n_x3 wide)."""
+        mesh, x = self.model.mesh, self.model.mesh.x
+        seg, owner = mesh.edge_segments(spec.edge)
+        face = np.unique(seg)
+        # the far side of the layer, as geometry: every face node moved by h along the face's
+        # outward normal there (the mean of its segments' normals at a shared corner); its
+        # dofs are the wall's (fixed) or the other body's nodes across the face
+        row_of = np.full(mesh.n_nodes, -1)
+        row_of[face] = np.arange(len(face))
+        position = row_of[seg]  # (n_seg, nodes per segment): each segment node's place in face
+        normal = segment_normals(x[seg], mesh.element_x()[owner].mean(axis=1))
+        out_node = np.zeros((len(face), 2))
+        np.add.at(out_node, position, normal)
+        out_node /= np.linalg.norm(out_node, axis=1, keepdims=True)
+        far_x = x[face] + self.h * out_node
+        build = moment_layer if mesh.order == 1 else quadratic_layer
+        paired = spec.across is not None
+        points = build(x[seg], far_x[position], [float(m.l) for m in self.model.modes], far=paired)
+        nodes = seg[points.element][:, points.columns]
+        if paired:  # the other body's nodes across the face's, then the face's
+            nodes = np.concatenate([spec.across[seg[points.element]][:, points.far_columns], nodes], axis=1)
+            gap = np.einsum("pn,pn->p", points.N, spec.gap[seg[points.element]])[:, None] + 0.0 * self.x3[None, :]
+        else:
+            gap = self.model.case.wall.gap_at(points.r[:, None] * np.cos(self.x3)[None, :], x[face, 0].max())
+        return points, nodes, gap
 
     # -- kinematics ---------------------------------------------------------------------------
     def face_values(self, u: np.ndarray) -> np.ndarray:
@@ -380,9 +443,11 @@ class ContactLayer:
         self.states = states
 
     # -- what a run reports ---------------------------------------------------------------------
-    def mean_normal_stress(self, strain: np.ndarray, states: LayerStates) -> float:
-        """Mean normal stress on the face (compressive negative): the contact pressure."""
-        return float(np.sum(self.area * self.stress(strain, states)[..., NORMAL]) / self.area.sum())
+    def mean_normal_stress(self, strain: np.ndarray, states: LayerStates, side: int | None = None) -> float:
+        """Mean normal stress on the face (compressive negative): the contact pressure; of one
+        side's points (:attr:`side_edges`) or of all."""
+        area = self.area if side is None else np.where((self.side == side)[:, None], self.area, 0.0)
+        return float(np.sum(area * self.stress(strain, states)[..., NORMAL]) / area.sum())
 
     def energy(self, strain: np.ndarray, states: LayerStates) -> float:
         """Strain energy stored in the layer (the model's integrals along x3)."""
@@ -394,8 +459,9 @@ class ContactLayer:
         return float(self.area[states.kind != OPEN].sum() / self.area.sum())
 
 
-def face_free_mass(model, edge: str, i: int = 0) -> np.ndarray:
-    """Lumped mass (3 n_nodes,) of mode ``i`` with the face nodes' mass moved to the next row in.
+def face_free_mass(model, edge, i: int = 0) -> np.ndarray:
+    """Lumped mass (3 n_nodes,) of mode ``i`` with the face nodes' mass moved to the next row in
+    (``edge``: a face's name, or several: both faces of a contact pair).
 
     A massive face node on the stiff layer is an oscillator far above what dt resolves:
     Newmark leaves it undamped and the contact pressure rings at the Nyquist frequency. With
@@ -405,10 +471,13 @@ def face_free_mass(model, edge: str, i: int = 0) -> np.ndarray:
     m = model.full_mass(i, i).reshape(-1, 3).copy()
     mesh = model.mesh
     if mesh.shape is None:
-        face, inside = _next_row_in(mesh, edge)
-        m[inside] += m[face]
-        m[face] = 0.0
+        for name in (edge,) if isinstance(edge, str) else edge:
+            face, inside = _next_row_in(mesh, name)
+            m[inside] += m[face]
+            m[face] = 0.0
         return m.ravel()
+    if not isinstance(edge, str):  # a mapped block is one body: one face against the wall
+        (edge,) = edge
     ns, nt = mesh.shape
     grid = np.arange(mesh.n_nodes).reshape(mesh.order * nt + 1, mesh.order * ns + 1)  # mid-sides too
     face, inside = {"s_min": (grid[:, 0], grid[:, 1]), "s_max": (grid[:, -1], grid[:, -2]),
@@ -461,10 +530,11 @@ class ContactSystem:
         p = case.params
         layer = self.layer = ContactLayer(model, p["layer_thickness"], p["layer_stiffness"] * case.material.E,
                                           options.layer_points_per_harmonic)
+        self._velocity_rows: dict = {}
         systems = model.systems
         self.model, self.K, self.max_state_iterations = model, [s.K for s in systems], options.max_state_iterations
         self.Q = np.concatenate([s.Q for s in systems])
-        self.m_full = [face_free_mass(model, case.wall.edge, i) for i in range(len(systems))]
+        self.m_full = [face_free_mass(model, layer.layer_edges, i) for i in range(len(systems))]
         self.M = np.concatenate([s.T.multiply(s.T).T @ m for s, m in zip(systems, self.m_full)])
         self.c = Constants.of(dt)
         self.offsets = layer.offsets
@@ -477,7 +547,6 @@ class ContactSystem:
             self.S[i * nF:(i + 1) * nF, i * nF:(i + 1) * nF] = C @ Z
         self.face_blocks: dict[bytes, np.ndarray] = {}
         self.max_closure = 0.0  # largest layer compression over the run, in layer thicknesses
-        self.velocity_row = self._mean_axial_velocity_row()
         self.energies, self.closed, self.contact_steps, self.last = [], [0.0], [], None
 
     def blocks(self, vector: np.ndarray) -> list[np.ndarray]:
@@ -488,14 +557,18 @@ class ContactSystem:
         """``K u`` of the body (all modes stacked)."""
         return np.concatenate([K @ ui for K, ui in zip(self.K, self.blocks(u))])
 
-    def _mean_axial_velocity_row(self) -> np.ndarray:
+    def _mean_axial_velocity_row(self, region: str | None) -> np.ndarray:
         """Row giving the mass-weighted mean axial velocity (momentum / mass) of stacked
-        amplitudes: only harmonic 0 carries a mean."""
+        amplitudes, of the whole section or of one region (a body): only harmonic 0 carries a
+        mean."""
         row = np.zeros(self.model.n_dof)
+        mesh = self.model.mesh
         for i, (s, m_full) in enumerate(zip(self.model.systems, self.m_full)):
             if s.mode == Mode(0, "c"):
                 axial = np.zeros_like(m_full)
-                axial[1::3] = m_full[1::3]  # x2 = z is the axis of the rod
+                nodes = (np.arange(mesh.n_nodes) if region is None
+                         else np.unique(mesh.elements[mesh.regions[region]]))
+                axial[3 * nodes + 1] = m_full[3 * nodes + 1]  # x2 = z is the axis of the rod
                 row[self.offsets[i]:self.offsets[i + 1]] = (s.T.T @ axial) / axial.sum()
         return row
 
@@ -558,7 +631,7 @@ class ContactSystem:
         closure = -(strain[..., NORMAL] + layer.pre_closure)
         self.max_closure = max(self.max_closure, float(closure.max()))
         if closure.max() >= 1.0:
-            raise ContactError(f"step {step_index} (t = {t:.6g} s): the face went through the wall (layer "
+            raise ContactError(f"step {step_index} (t = {t:.6g} s): the face went through the wall or the other body (layer "
                                f"compressed {closure.max():.3g} times its thickness): raise layer_stiffness "
                                f"or lower dt")
         self.strain, self.states = strain, states
@@ -568,13 +641,19 @@ class ContactSystem:
         self.layer.commit(self.strain, self.states)
 
     # -- what a run reports ---------------------------------------------------------------------
-    def contact_pressure(self, state: State) -> float:
-        """The layer's mean normal stress on the struck face (``edge_mean`` of sigma)."""
-        return self.layer.mean_normal_stress(self.strain, self.states)
+    def contact_pressure(self, state: State, probe=None) -> float:
+        """The layer's mean normal stress on the probe's face (``edge_mean`` of sigma): the
+        points of the side the face belongs to (either face of a pair)."""
+        edge = getattr(probe, "edge", None)
+        sides = [k for k, edges in enumerate(self.layer.side_edges) if edge in edges]
+        return self.layer.mean_normal_stress(self.strain, self.states, sides[0] if sides else None)
 
-    def mean_axial_velocity(self, state: State) -> float:
-        """Mass-weighted mean axial velocity (``body_mean`` of v)."""
-        return float(self.velocity_row @ state.v)
+    def mean_axial_velocity(self, state: State, probe=None) -> float:
+        """Mass-weighted mean axial velocity (``body_mean`` of v), of the probe's region."""
+        region = getattr(probe, "region", None)
+        if region not in self._velocity_rows:
+            self._velocity_rows[region] = self._mean_axial_velocity_row(region)
+        return float(self._velocity_rows[region] @ state.v)
 
     def energy(self, state: State) -> float:
         """Kinetic + strain energy of the body and the layer (the model's integrals over x3)."""

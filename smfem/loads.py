@@ -116,9 +116,14 @@ def sample_times(case) -> np.ndarray:
     return np.array(sorted(times))
 
 
+def region_nodes(mesh: SectionMesh, region: str | None):
+    """The nodes of a named region's elements (a body of a scene of several), or every node."""
+    return slice(None) if region is None else np.unique(mesh.elements[mesh.regions[region]])
+
+
 def velocity_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode, np.ndarray]:
     """Initial velocity amplitudes (3 n_nodes,): the projection ``int v psi / int psi^2`` of a
-    uniform velocity on each mode."""
+    uniform velocity (of the whole section or of one region) on each mode."""
     out = {}
     for mode in modes:
         V = np.zeros((mesh.n_nodes, 3))
@@ -128,7 +133,7 @@ def velocity_amplitudes(case, mesh: SectionMesh, modes: list[Mode]) -> dict[Mode
             c = iv.component - 1
             which = 0 if c < 2 else 1
             if norm[which]:
-                V[:, c] += iv.value * integral[which] / norm[which]
+                V[region_nodes(mesh, iv.region), c] += iv.value * integral[which] / norm[which]
         out[mode] = V.ravel()
     return out
 

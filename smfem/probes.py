@@ -160,6 +160,7 @@ class CaseProbes:
         if plastic and hasattr(system, "peps"):
             self.plastic = PlasticStrainProbes(model, plastic, system.peps_x3, system.peps_images)
         self.names = list(case.probe_names)
+        self.probes = case.probes
         self.columns = []
         for q in case.probes:
             if q.field == "peps":
@@ -180,4 +181,4 @@ class CaseProbes:
             return point
         plastic = self.plastic.evaluate(system.peps_sampled) if self.plastic else ()
         return np.array([point[i] if kind == "point" else plastic[i] if kind == "plastic"
-                         else getattr(system, i)(state) for kind, i in self.columns])
+                         else getattr(system, i)(state, q) for (kind, i), q in zip(self.columns, self.probes)])

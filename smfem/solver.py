@@ -98,11 +98,11 @@ def build_system(case, options: SolverOptions):
     plastic = laws.get(case.material).nonlinear  # a law whose stress depends on its state: the iterations
     if case.params.get("time_scheme", "newmark") == "gauss":
         return gauss_system(case, options, plastic)
-    if case.wall is not None:
+    if case.wall is not None or case.contacts:
         if plastic:
             raise ModelError(f"{case.name}: contact with plasticity is not supported: set plastic=false")
         if case.forces or any(load.timed for load in case.loads):
-            raise ModelError(f"{case.name}: with a wall, loads are steps held in place: body forces, amplitudes "
+            raise ModelError(f"{case.name}: with contact, loads are steps held in place: body forces, amplitudes "
                              "and moving loads are not supported")
         # harmonic 0 alone for an axisymmetric scene, else every mode the wall's symmetry allows
         model = Model(case, nonlinear=not case.axisymmetric)
@@ -140,7 +140,7 @@ def build_system(case, options: SolverOptions):
 def gauss_system(case, options: SolverOptions, plastic: bool):
     """:func:`build_system` for ``time_scheme=gauss``: the linear system factorized whole, or a
     :class:`ModelError` that says why not."""
-    refused = ("plasticity" if plastic else "a rigid wall" if case.wall is not None else
+    refused = ("plasticity" if plastic else "contact" if case.wall is not None or case.contacts else
                f"iteration_matrix={options.iteration_matrix}" if options.iteration_matrix not in ("auto", "coupled")
                else "")
     if refused:
