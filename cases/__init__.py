@@ -8,11 +8,11 @@
 
 from pathlib import Path
 
-from . import dome, flywheel, layered_cylinder, moving_load, notched_cylinder, notched_strip, rod_collision, rod_impact, scene_file, thick_cylinder
+from . import dome, flywheel, layered_cylinder, moving_load, notched_cylinder, notched_strip, ring_in_ring, rod_collision, rod_impact, scene_file, thick_cylinder
 from .case import Case
 from .params import ParameterError, UnsupportedCase, parse_sets, validate
 
-_MODULES = (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact, layered_cylinder, flywheel, moving_load, rod_collision)
+_MODULES = (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact, layered_cylinder, flywheel, moving_load, rod_collision, ring_in_ring)
 CASES = {m.NAME: m for m in _MODULES}
 #: scenes that are a built-in scene at other parameters, under their own name (their stored
 #: truth, example file and report section): the scene builds a case of this name whenever its

@@ -154,6 +154,13 @@ COMMON = {
                              "(order 4, smfem/gauss.py)"),
 }
 
+#: the keys of a scene of bodies in contact: the pairs' friction and SMFEM's layer between them
+PAIR_SPECS = {
+    "friction": Spec(float, 0.0, 10.0, help="Coulomb friction coefficient between the bodies' faces"),
+    "layer_thickness": Spec(float, 1e-9, 1e-2, help="SMFEM contact layer thickness, m"),
+    "layer_stiffness": Spec(float, 1e-3, 1e6, help="SMFEM contact layer Young's modulus, multiple of E"),
+}
+
 
 #: a bare word ``--set`` takes as a choice (``element=quad9``)
 WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*")

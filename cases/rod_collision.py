@@ -22,7 +22,7 @@ from .bodies import Body, assemble
 from .case import Case
 from .geometry import RING, Axis, ContactPair, InitialVelocity, Probe, Section
 from .material import Material
-from .params import COMMON, Spec
+from .params import COMMON, PAIR_SPECS, Spec
 
 NAME = "rod_collision"
 TITLE = "Two elastic rods colliding (contact between deformable bodies)"
@@ -34,10 +34,8 @@ DEFAULTS = dict(
 )
 SPECS = dict(
     COMMON,
+    **PAIR_SPECS,
     v0=Spec(float, 0.0, 1e5, open_lo=True, help="the striker's speed towards the target, m/s"),
-    friction=Spec(float, 0.0, 10.0, help="Coulomb friction coefficient between the faces"),
-    layer_thickness=Spec(float, 1e-9, 1e-2, help="SMFEM contact layer thickness, m"),
-    layer_stiffness=Spec(float, 1e-3, 1e6, help="SMFEM contact layer Young's modulus, multiple of E"),
 )
 PROVENANCE = dict(
     paper="the contact layer between deformable bodies (17)-(19); the rods' material and layer as the rod impact's",

@@ -1,7 +1,9 @@
 """Scenes from a TOML file: ``smfem run my_scene.toml`` (docs/scenes.md, "Scenes from a file").
 
 A file describes one body of revolution (``body = "ring"``) or prism (``body = "prism"``) with
-the pieces of :mod:`cases.geometry`. Its ``[params]`` are checked by the specs of ``--set``
+the pieces of :mod:`cases.geometry`, or several such bodies (``[[bodies]]``, one mapped block
+each, assembled by :func:`cases.bodies.assemble`) and the contact pairs between their faces
+(``[[contact]]``). Its ``[params]`` are checked by the specs of ``--set``
 (:data:`cases.params.COMMON` and the built-in scenes' own keys) and then merged with the
 overrides by :func:`cases.params.validate`, the one path of ``--set``. Any number of the scene
 may be written as the name of a parameter in quotes (``q = "q"``, ``value = "-v0"``): it then
@@ -20,11 +22,14 @@ import re
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
-from . import dome, flywheel, layered_cylinder, moving_load, notched_cylinder, notched_strip, rod_impact, thick_cylinder
+from . import (dome, flywheel, layered_cylinder, moving_load, notched_cylinder, notched_strip, rod_collision,
+               rod_impact, thick_cylinder)
+from .bodies import Body, assemble, body_of, check_pairs
 from .case import Case
-from .geometry import (EDGES, PRISM, RING, UNIFORM_SHIFTS, Amplitude, Axis, Cutout, Force, InitialVelocity, Pressure, Probe,
-                       Region, Section, Support, Wall)
+from .geometry import (EDGES, PRISM, RING, UNIFORM_SHIFTS, Amplitude, Axis, ContactPair, Cutout, Force, InitialVelocity,
+                       Pressure, Probe, Region, Section, Support, Wall)
 from .material import Material
 from .params import COMMON, MAX_STRESS, ParameterError, Spec, UnsupportedCase, failure, validate
 
@@ -32,7 +37,8 @@ from .params import COMMON, MAX_STRESS, ParameterError, Spec, UnsupportedCase, f
 def _scene_keys() -> dict[str, Spec]:
     """The built-in scenes' own keys (q, contrast, notch_depth, v0, gap, ...) with their ranges."""
     keys: dict[str, Spec] = {}
-    for module in (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact, layered_cylinder, flywheel, moving_load):
+    for module in (dome, thick_cylinder, notched_cylinder, notched_strip, rod_impact, layered_cylinder, flywheel,
+                   moving_load, rod_collision):
         keys.update({k: spec for k, spec in module.SPECS.items() if k not in COMMON and k not in keys})
     return keys
 
@@ -42,15 +48,22 @@ SCENE_KEYS = _scene_keys()
 #: [params] keys a file must give; the other common keys default to OPTIONAL
 REQUIRED = ("dt", "t_end", "harmonics", "E", "nu", "rho", "tau_s")
 OPTIONAL = dict(refine=1, plastic=False, tol=1e-5, dim=2)
-#: scene keys a feature of the scene reads itself: required with it, refused without it
-BOUND = {"contrast": "cutout", "layer_thickness": "wall", "layer_stiffness": "wall"}
-FEATURES = {"cutout": "[[cutout]]", "wall": "[wall]"}
+#: scene keys the features of the scene read themselves: required with any of them, refused
+#: without all of them (SMFEM's contact layer is a wall's and a contact pair's)
+BOUND = {"contrast": ("cutout",), "layer_thickness": ("wall", "contact"), "layer_stiffness": ("wall", "contact")}
+FEATURES = {"cutout": "[[cutout]]", "wall": "[wall]", "contact": "[[contact]]"}
 
 TOP = ("name", "title", "body", "units", "length", "symmetric", "axisymmetric", "params", "material",
-       "section", "region", "load", "body_force", "traction", "support", "cutout", "initial_velocity", "wall", "probe",
-       "references")
-REGION_KEYS = ("name", "E", "nu", "rho", "tau_s", "E_T", "s_range", "t_range")
-PROBE_KEYS = ("name", "kind", "field", "component", "point", "edge")
+       "section", "bodies", "region", "load", "body_force", "traction", "support", "cutout", "initial_velocity", "wall",
+       "contact", "probe", "references")
+#: a material's own constants (a region's, a body's); the others are the scene's, [params]
+MATERIAL_KEYS = ("E", "nu", "rho", "tau_s", "E_T")
+REGION_KEYS = ("name", *MATERIAL_KEYS, "s_range", "t_range")
+#: a body of a scene of several: its name, its mapped block as [section] takes it, its material
+BODY_KEYS = ("name", "kind", "s", "t", "edges", *MATERIAL_KEYS)
+CONTACT_KEYS = ("face", "other", "friction", "interference")
+VELOCITY_KEYS = ("component", "value", "region")
+PROBE_KEYS = ("name", "kind", "field", "component", "point", "edge", "region")
 #: probe kind -> the fields it may record
 PROBE_FIELDS = {"point": ("u", "v", "sigma", "peps"), "max": ("peps",), "edge_mean": ("sigma",),
                 "body_mean": ("u", "v")}
@@ -200,6 +213,8 @@ class _Scene:
         self.top = _Table(self, doc, "", TOP)
         self.params: dict = {}
         self.named: set[str] = set()  # the parameters some value names
+        self.bodies: tuple[str, ...] = ()  # the names of [[bodies]], none with [section]
+        self.body_regions: tuple[Region, ...] = ()  # the bodies that give their own material
 
     def fail(self, where: str, message: str):
         raise ParameterError(_one_line(f"{self.file}: {where}: {message}"))
@@ -226,8 +241,11 @@ class _Scene:
         name = top.string("name")
         if not NAME.fullmatch(name):
             top.fail("name", f"{name!r}: letters, digits, '_', '-' and '.' only (it names the output directory)")
+        if isinstance(top.data.get("body"), list):  # [[body]] for [[bodies]]
+            top.fail("body", "write body = \"ring\" or \"prism\"; a scene's several bodies are [[bodies]] tables")
         self.body = body = top.string("body", choices=(RING, PRISM))
-        features = {"cutout": bool(top.data.get("cutout")), "wall": top.has("wall")}
+        features = {"cutout": bool(top.data.get("cutout")), "wall": top.has("wall"),
+                    "contact": bool(top.data.get("contact"))}
         params = top.table("params", tuple(COMMON) + tuple(SCENE_KEYS))
         self.params = p = self.read_params(params, features, name, overrides)
         if body == PRISM:
@@ -238,7 +256,7 @@ class _Scene:
             top.fail("length", "a ring goes 2 pi round: length is for body = \"prism\" only")
         else:
             self.length = TWO_PI
-        self.section = self.read_section(top.table("section", ("kind", "s", "t", "edges", "file")))
+        self.section = self.read_sections(top)
         material = top.table("material", ("E_T", "variation"), default={},
                              hint=" (E, nu, rho, tau_s and plastic are parameters: give them in [params])")
         E_T = material.number("E_T", 0.0, lo=0.0)
@@ -253,6 +271,7 @@ class _Scene:
         cutouts = tuple(self.read_cutout(t) for t in top.tables("cutout", ("s_range", "t_range", "x3_intervals")))
         regions = self.read_regions(top.tables("region", REGION_KEYS))
         wall = self.read_wall(top.table("wall", ("edge", "gap", "friction", "slope"))) if features["wall"] else None
+        contacts = self.read_contacts(top.tables("contact", CONTACT_KEYS))
         probes = tuple(self.read_probe(t) for t in top.tables("probe", PROBE_KEYS))
         if not probes:
             top.fail("probe", "missing: a scene needs at least one [[probe]] (the columns of history.csv)")
@@ -262,8 +281,8 @@ class _Scene:
             loads=loads, supports=tuple(self.read_support(t) for t in top.tables("support", ("edge", "components"))),
             probes=probes, params=p, length=self.length, cutouts=tuple(c for c in cutouts if c is not None),
             contrast=p.get("contrast", 1.0),
-            initial_velocity=tuple(self.read_velocity(t) for t in top.tables("initial_velocity", ("component", "value"))),
-            wall=wall, forces=forces, variation=variation, regions=regions,
+            initial_velocity=tuple(self.read_velocity(t) for t in top.tables("initial_velocity", VELOCITY_KEYS)),
+            wall=wall, forces=forces, variation=variation, regions=regions, contacts=contacts,
             units=top.string("units", Case.__dataclass_fields__["units"].default),
             references=self.read_references(top, probes), source=source,
             **self.read_symmetry(top, loads, cutouts, wall, forces, variation),
@@ -281,9 +300,9 @@ class _Scene:
                 defaults[key] = specs[key].check(key, value)
             except ParameterError as exc:
                 table.fail(key, str(exc))
-        for key in REQUIRED + tuple(k for k, feature in BOUND.items() if features[feature]):
+        for key in REQUIRED + tuple(k for k, needs in BOUND.items() if any(features[f] for f in needs)):
             if key not in table.data:
-                why = f" (a scene with {FEATURES[BOUND[key]]} needs it)" if key in BOUND else ""
+                why = f" (a scene with {_features(key, features, True)} needs it)" if key in BOUND else ""
                 table.fail(key, f"missing{why}: {(COMMON.get(key) or SCENE_KEYS[key]).help}")
         try:
             validate(specs, defaults, {}, name)
@@ -298,8 +317,40 @@ class _Scene:
                 continue
             if key not in BOUND:
                 table.fail(key, f"no value of the scene names it (write e.g. q = \"{key}\" where it belongs)")
-            if not features[BOUND[key]]:
-                table.fail(key, f"the scene has no {FEATURES[BOUND[key]]} to use it")
+            if not any(features[f] for f in BOUND[key]):
+                table.fail(key, f"the scene has no {_features(key, features, False)} to use it")
+
+    def read_sections(self, top: _Table):
+        """``[section]`` (one body), or ``[[bodies]]`` (several): one of them, not both."""
+        if top.has("section") == top.has("bodies"):
+            top.fail("bodies" if top.has("bodies") else "section",
+                     "give either [section] (one body) or [[bodies]] (several), "
+                     + ("not both" if top.has("section") else "missing both"))
+        if top.has("section"):
+            return self.read_section(top.table("section", ("kind", "s", "t", "edges", "file")))
+        return self.read_bodies(top, top.tables("bodies", BODY_KEYS))
+
+    def read_bodies(self, top: _Table, tables: list[_Table]):
+        """``[[bodies]]``: at least two named mapped blocks, assembled into one mesh section
+        (:func:`cases.bodies.assemble`: each body a region, its edge ``e`` the edge ``'body.e'``);
+        a body that gives material constants is a region of its own material."""
+        if len(tables) < 2:
+            top.fail("bodies", f"{len(tables)} given: a scene of several bodies needs at least two (one body: "
+                               "write [section])")
+        bodies, regions = [], []
+        for t in tables:
+            name = t.string("name")
+            if not WORD.fullmatch(name) or name in (b.name for b in bodies):
+                t.fail("name", f"{name!r}: a word of letters, digits and '_' (no '.'), one per body")
+            bodies.append(Body(name, self.read_block(t, t.string("kind", choices=("rect", "polar")))))
+            if any(t.has(k) for k in MATERIAL_KEYS):
+                regions.append(Region(name, self.read_material(t)))
+        self.bodies, self.body_regions = tuple(b.name for b in bodies), tuple(regions)
+        try:
+            with _quiet():
+                return assemble(bodies, path=self.file)
+        except UnsupportedCase as exc:  # the names are checked above; anything else is still one line
+            top.fail("bodies", str(exc))
 
     def read_section(self, t: _Table):
         kind = t.string("kind", choices=("rect", "polar", "mesh"))
@@ -307,6 +358,10 @@ class _Scene:
             return self.read_mesh_section(t)
         if t.has("file"):
             t.fail("file", f"for kind = \"mesh\" only (a {kind} block is given by s, t and edges)")
+        return self.read_block(t, kind)
+
+    def read_block(self, t: _Table, kind: str) -> Section:
+        """A mapped block of ``kind`` (rect, polar): axes ``s`` and ``t``, named ``edges``."""
         s, tt = self.read_axis(t, "s"), self.read_axis(t, "t")
         if kind == "polar" and s.breaks[0] <= 0:
             t.fail("s.breaks", f"{s.breaks[0]!r}: a polar section's radius s must be > 0")
@@ -342,8 +397,14 @@ class _Scene:
     def read_regions(self, tables: list[_Table]) -> tuple[Region, ...]:
         """``[[region]]``: a part of the section of its own material (the other constants as the
         body's, ``[params]``): a physical surface ``name`` of a mesh section, or on a block the
-        box ``s_range`` x ``t_range``."""
-        p, mesh = self.params, self.section.kind == "mesh"
+        box ``s_range`` x ``t_range``. A scene of several bodies gives a body's material in its
+        ``[[bodies]]`` table instead (one place for it)."""
+        if self.bodies:
+            if tables:
+                self.fail("region", "not with [[bodies]]: give a body's own material (E, nu, rho, tau_s, E_T) in "
+                                    "its [[bodies]] table")
+            return self.body_regions
+        mesh = self.section.kind == "mesh"
         out = []
         for t in tables:
             name = t.string("name")
@@ -359,20 +420,25 @@ class _Scene:
                 box = (None, None)
             else:
                 box = self.read_box(t, empty=False)
-            E = t.number("E", p["E"], lo=0.0)
-            E_T = t.number("E_T", 0.0, lo=0.0)
-            if E <= 0 or E_T >= E:
-                t.fail("E" if E <= 0 else "E_T", "need E > 0 and 0 <= E_T < E")
-            nu = t.number("nu", p["nu"], lo=-0.9999, hi=0.49999)
-            material = Material(E, nu, t.number("rho", p["rho"], lo=1e-12), t.number("tau_s", p["tau_s"], lo=0.0),
-                                E_T=E_T, plastic=p["plastic"])
-            out.append(Region(name, material, *box))
+            out.append(Region(name, self.read_material(t), *box))
         if not mesh:
             for i, a in enumerate(out):
                 for b in out[:i]:
                     if all(max(x[0], y[0]) < min(x[1], y[1]) for x, y in ((a.s_range, b.s_range), (a.t_range, b.t_range))):
                         self.fail("region", f"regions {b.name!r} and {a.name!r} overlap")
         return tuple(out)
+
+    def read_material(self, t: _Table) -> Material:
+        """A region's or a body's own material: ``E``, ``nu``, ``rho``, ``tau_s``, ``E_T``, each
+        as ``[params]`` (E_T: 0) where not given; the body's law (``plastic``)."""
+        p = self.params
+        E = t.number("E", p["E"], lo=0.0)
+        E_T = t.number("E_T", 0.0, lo=0.0)
+        if E <= 0 or E_T >= E:
+            t.fail("E" if E <= 0 else "E_T", "need E > 0 and 0 <= E_T < E")
+        nu = t.number("nu", p["nu"], lo=-0.9999, hi=0.49999)
+        return Material(E, nu, t.number("rho", p["rho"], lo=1e-12), t.number("tau_s", p["tau_s"], lo=0.0),
+                        E_T=E_T, plastic=p["plastic"])
 
     def read_axis(self, section: _Table, key: str) -> Axis:
         t = section.table(key, ("breaks", "counts", "refinable"))
@@ -540,7 +606,51 @@ class _Scene:
         return box
 
     def read_velocity(self, t: _Table) -> InitialVelocity:
-        return InitialVelocity(t.integer("component", 1, 3), t.number("value"))
+        """A uniform initial velocity of the whole section, or of one body (``region``)."""
+        return InitialVelocity(t.integer("component", 1, 3), t.number("value"), self.region(t))
+
+    def region(self, t: _Table) -> str | None:
+        """The body (a mesh section's physical surface) that ``region`` names; None without it."""
+        if not t.has("region"):
+            return None
+        if self.section.kind != "mesh":
+            t.fail("region", "one mapped block has no regions: region names a body of [[bodies]] or a physical "
+                             "surface of a mesh section")
+        name, names = t.string("region"), tuple(self.section.regions)
+        if name not in names:
+            what = ("a body of the scene", "bodies") if self.bodies else ("a physical surface of the mesh", "surfaces")
+            t.fail("region", f"{name!r} is not {what[0]} (its {what[1]}: {', '.join(names)})")
+        return name
+
+    def read_contacts(self, tables: list[_Table]) -> tuple[ContactPair, ...]:
+        """``[[contact]]``: a face of one body against a face of another (``'body.edge'``), each
+        face in one pair at most, their geometry checked as :func:`cases.bodies.check_pairs`
+        checks it (faces that face each other node for node, overlapping by no more than the
+        stated ``interference``)."""
+        if tables and not self.bodies:
+            self.fail("contact", "a contact pair joins two bodies: give them as [[bodies]] tables (a rigid wall is "
+                                 "[wall])")
+        pairs: list[ContactPair] = []
+        for t in tables:
+            face, other = self.edge(t, "face"), self.edge(t, "other")
+            for key, edge in (("face", face), ("other", other)):
+                taken = next((i for i, p in enumerate(pairs, 1) if edge in (p.face, p.other)), None)
+                if taken is not None:
+                    t.fail(key, f"{edge!r} is in contact[{taken}] already: a face is in one pair at most")
+            if body_of(face) == body_of(other):
+                t.fail("other", f"{other!r} is of the body {body_of(face)!r} as the face is: a pair joins two bodies")
+            pairs.append(ContactPair(face, other, t.number("friction", 0.0, lo=0.0),
+                                     t.number("interference", 0.0, lo=0.0)))
+            self.check_pair(t, pairs[-1])
+        return tuple(pairs)
+
+    def check_pair(self, t: _Table, pair: ContactPair) -> None:
+        """The pair's geometry by :func:`cases.bodies.check_pairs`, its refusal the file's line."""
+        try:
+            with _quiet():  # a case's name, section and pairs: what check_pairs reads of it
+                check_pairs(SimpleNamespace(name=self.file, section=self.section, contacts=(pair,)))
+        except UnsupportedCase as exc:
+            self.fail(t.where, str(exc).removeprefix(f"{self.file}: "))
 
     def read_wall(self, t: _Table) -> Wall:
         return Wall(self.edge(t, "edge"), t.number("gap", lo=0.0), t.number("friction", lo=0.0),
@@ -574,11 +684,16 @@ class _Scene:
         point = t.numbers("point", 3) if kind == "point" else None
         if point is not None:
             self.check_point(t, point)
-        return Probe(name, kind, field, component, point, self.edge(t, "edge") if kind == "edge_mean" else None)
+        if t.has("region") and kind != "body_mean":
+            t.fail("region", f"not for a {kind} probe (a body_mean probe's body)")
+        return Probe(name, kind, field, component, point, self.edge(t, "edge") if kind == "edge_mean" else None,
+                     self.region(t))
 
     def check_point(self, t: _Table, point: tuple[float, float, float]) -> None:
         """The point lies in the section (to round-off) and along x3 in the body."""
-        if not self.section.contains(point[0], point[1]):
+        with _quiet():
+            inside = self.section.contains(point[0], point[1])
+        if not inside:
             t.fail("point", f"{list(point)!r} is outside the section")
         lo, hi = (0.0, self.length) if self.body == PRISM else (-TWO_PI, TWO_PI)
         if not lo <= point[2] <= hi:
@@ -640,6 +755,19 @@ class _Scene:
             singular = t.table("singular_probes", tuple(p.name for p in probes))
             out["singular_probes"] = {k: singular.string(k) for k in singular.data}
         return out
+
+
+def _quiet():
+    """Numpy's floating-point warnings off while a mesh section is built or searched: an absurd
+    geometry (breaks of 1e300) is refused, or taken as the block sections take it, in one line."""
+    import numpy as np
+
+    return np.errstate(all="ignore")
+
+
+def _features(key: str, features: dict, present: bool) -> str:
+    """The features that read parameter ``key``, those the scene has (``present``) or all."""
+    return " or ".join(FEATURES[f] for f in BOUND[key] if features[f] or not present)
 
 
 def _merged(pieces) -> list[tuple[float, float]]:

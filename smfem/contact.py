@@ -72,104 +72,34 @@ from cases.geometry import RING
 from . import element, fourier, quad9
 from .element import GAUSS_A, strain_operator, strain_rotation
 from .fourier import Mode
+from .layer_law import (
+    NORMAL,
+    OPEN,
+    TRACTION,
+    ContactError,
+    LayerStates,
+    layer_states,
+    layer_tangent,
+    offset_strain,
+    slip_after,
+    stick_where_reversed,
+)
 from .linalg import factorize_spd
+from .layer_descent import descend
 from .loads import segment_shape_functions
 from .model import ModelError
-from .newmark import Constants, State, StepFailed
+from .newmark import Constants, State
 from .options import SolverOptions
 
-OPEN, STICK, SLIP = 0, 1, 2
-NORMAL = 1  # strain row e22: normal to the layer
-SHEAR = [3, 5]  # g12 (tangential in the section plane) and g23 (tangential along x3)
-TRACTION = [NORMAL] + SHEAR  # the only rows that carry stress in the layer
-#: a layer point closed by less than this strain (1e-14 m across a 0.1 mm layer) is open: where
-#: two faces just touch at the end of a step, round-off would otherwise flip their points
-#: between open and closed for ever
-CLOSURE_TOL = 1e-10
 #: the smallest share of a step towards the next iterate before a cycle counts as chattering
 MIN_RELAXATION = 1.0 / 16
-#: a slip direction that moves less than this between iterations has settled
-DIRECTION_TOL = 1e-6
 #: relative energy gain over a run without loads beyond which the result is rejected
 ENERGY_GAIN_LIMIT = 0.01
+#: an eigenvalue of a mode's face compliance below this share of its largest is a direction
+#: the face cannot move in (round-off of a constraint)
+RANGE_TOL = 1e-12
 #: layer matrices kept per run, keyed by state (a few patterns recur)
 CACHE_SIZE = 64
-
-
-class LayerStates(NamedTuple):
-    """State of every layer point, ``(n_points, n_x3)`` arrays.
-
-    ``kind``: OPEN, STICK or SLIP; ``direction`` (.., 2): unit slip direction in the two
-    tangential shears (zero unless slipping); ``kappa``: ``f |sigma_n| / |tau_trial|`` of a
-    slipping point, the weight of the slip direction's change in the consistent tangent.
-    """
-
-    kind: np.ndarray
-    direction: np.ndarray
-    kappa: np.ndarray
-
-    def close_to(self, other: "LayerStates", tol: float = DIRECTION_TOL) -> bool:
-        """Same kinds and slip directions within ``tol``: an iteration has come back here."""
-        return np.array_equal(self.kind, other.kind) and np.abs(self.direction - other.direction).max(initial=0.0) < tol
-
-    def key(self) -> bytes:
-        return self.kind.tobytes() + self.direction.tobytes() + self.kappa.tobytes()
-
-
-# -- the layer's law, point by point: pure functions of arrays (n_points, n_x3, ...) ----------
-def layer_states(strain: np.ndarray, pre_closure: np.ndarray, slip: np.ndarray, E: float, G: float,
-                 f: float) -> LayerStates:
-    """State of every point: open where the layer would carry normal tension (closure
-    ``e_n + g / h >= 0``), else stick while the trial shear ``G (gamma - slip)`` stays within
-    ``f |sigma_n|``, else slip (always, without friction); the slip direction and ``kappa``."""
-    closure = strain[..., NORMAL] + pre_closure
-    sigma_n = E * closure
-    tau = G * (strain[..., SHEAR] - slip)  # trial: no further slip
-    size = np.linalg.norm(tau, axis=-1)
-    limit = f * np.abs(sigma_n)
-    kind = np.where((f > 0) & (size <= limit), STICK, SLIP)
-    kind = np.where(closure >= -CLOSURE_TOL, OPEN, kind)
-    slipping = (kind == SLIP) & (size > 0) & (f > 0)  # without friction no direction
-    safe = np.where(slipping, size, 1.0)
-    direction = np.where(slipping[..., None], tau / safe[..., None], 0.0)
-    kappa = np.where(slipping, limit / safe, 0.0)
-    return LayerStates(kind, direction, kappa)
-
-
-def layer_tangent(states: LayerStates, E: float, G: float, f: float) -> np.ndarray:
-    """(n_points, n_x3, 6, 6) layer elasticity (the consistent tangent) of each state.
-
-    Slip: ``tau = -f sigma_n d`` with ``d`` the direction of the trial stress (18)-(19),
-    linearized about the current iterate: ``dtau/de_n = -f E d`` and
-    ``dtau/dgamma = kappa G (I - d d')`` (the direction turns with the tangential strain;
-    frozen, it flips between iterations where the slip turns).
-    """
-    kind, d = states.kind, states.direction
-    D = np.zeros(kind.shape + (6, 6))
-    D[..., NORMAL, NORMAL] = np.where(kind != OPEN, E, 0.0)
-    slip = kind == SLIP
-    for k, row in enumerate(SHEAR):
-        D[..., row, NORMAL] = np.where(slip, -f * E * d[..., k], 0.0)
-        for m, col in enumerate(SHEAR):
-            turn = states.kappa * G * ((k == m) - d[..., k] * d[..., m])
-            D[..., row, col] = np.where(kind == STICK, G * (k == m), np.where(slip, turn, 0.0))
-    return D
-
-
-def offset_strain(states: LayerStates, pre_closure: np.ndarray, slip: np.ndarray) -> np.ndarray:
-    """(n_points, n_x3, 6) strain the layer adds to the displacement's: the gap (``g / h``) and
-    the committed slip of closed points."""
-    e = np.zeros(states.kind.shape + (6,))
-    e[..., NORMAL] = pre_closure
-    e[..., SHEAR] = np.where((states.kind != OPEN)[..., None], -slip, 0.0)
-    return e
-
-
-def slip_after(strain: np.ndarray, states: LayerStates, sigma: np.ndarray, slip: np.ndarray, G: float) -> np.ndarray:
-    """The slip a converged step leaves: slipping points carry the part of their shear the
-    stress does not, open points release all of it, sticking points keep theirs."""
-    slip = np.where((states.kind == SLIP)[..., None], strain[..., SHEAR] - sigma[..., SHEAR] / G, slip)
-    return np.where((states.kind == OPEN)[..., None], strain[..., SHEAR], slip)
 
 
 # -- the layer elements' geometry: points along the face, their strain operators -------------
@@ -293,10 +223,6 @@ def layer_sides(case, mesh) -> list[LayerSide]:
     return sides
 
 
-class ContactError(StepFailed):
-    """Contact states that do not settle, or a face pushed through the wall."""
-
-
 class ContactLayer:
     """Layer elements on ``case.wall.edge`` of a ring model, a state at each of their points.
 
@@ -363,7 +289,7 @@ class ContactLayer:
         self._scatter = (R[:, None, :, :, None] * (n_modes * nF) + R[None, :, :, None, :]).ravel()
         self.size = n_modes * nF
 
-    def _side(self, spec: "LayerSide") -> tuple[LayerPoints, np.ndarray, np.ndarray]:
+    def _side(self, spec: LayerSide) -> tuple[LayerPoints, np.ndarray, np.ndarray]:
         """The layer elements on one face: their points, the nodes of ``B``'s columns at each
         point (the far side's first between two bodies) and the initial gap there (n_x3 wide)."""
         mesh, x = self.model.mesh, self.model.mesh.x
@@ -398,7 +324,11 @@ class ContactLayer:
 
     def strain(self, u: np.ndarray) -> np.ndarray:
         """(n_points, n_x3, 6) layer strain at the layer's points."""
-        amp = np.einsum("ierk,iek->ier", self.B, self.face_values(u)[:, self.local])
+        return self.face_strain(self.face_values(u))
+
+    def face_strain(self, w: np.ndarray) -> np.ndarray:
+        """(n_points, n_x3, 6) layer strain of the face displacements ``w`` (n_modes, n_F)."""
+        amp = np.einsum("ierk,iek->ier", self.B, w[:, self.local])
         return np.einsum("iqr,ier->eqr", self.psi, amp)
 
     # -- constitutive state (the law: :func:`layer_states`, :func:`layer_tangent`) -------------
@@ -416,9 +346,10 @@ class ContactLayer:
         return np.einsum("eqrs,eqs->eqr", self.D(states), strain + self.offset_strain(states))
 
     # -- matrices and forces ------------------------------------------------------------------
-    def face_matrix(self, states: LayerStates) -> np.ndarray:
-        """Dense layer stiffness on the face dofs of all modes, ``(n_modes n_F)`` square."""
-        D = self.D(states)[..., TRACTION, :][..., TRACTION] * self.area[..., None, None]
+    def face_matrix(self, states: LayerStates | None, D: np.ndarray | None = None) -> np.ndarray:
+        """Dense layer stiffness on the face dofs of all modes, ``(n_modes n_F)`` square, of the
+        states' tangent or of the points' tangents ``D`` (n_points, n_x3, 6, 6)."""
+        D = (self.D(states) if D is None else D)[..., TRACTION, :][..., TRACTION] * self.area[..., None, None]
         psi, n_modes = self.psi[..., TRACTION], len(self.C)
         Dw = np.zeros((n_modes, n_modes, len(self.element), 3, 3))
         for r in range(3):
@@ -431,7 +362,11 @@ class ContactLayer:
 
     def offset_force(self, states: LayerStates) -> np.ndarray:
         """(n_modes, n_F) nodal forces of the offset strain on the face dofs, ``int B' D e_off``."""
-        sigma = self.stress(np.zeros(states.kind.shape + (6,)), states)[..., TRACTION] * self.area[..., None]
+        return self.face_force(self.stress(np.zeros(states.kind.shape + (6,)), states))
+
+    def face_force(self, sigma: np.ndarray) -> np.ndarray:
+        """(n_modes, n_F) nodal forces ``int B' sigma`` of the points' stresses (n_points, n_x3, 6)."""
+        sigma = sigma[..., TRACTION] * self.area[..., None]
         projected = np.einsum("iqr,eqr->ier", self.psi[..., TRACTION], sigma)
         per = np.einsum("ierk,ier->iek", self.B[:, :, TRACTION], projected)
         return np.bincount(self._rows, per.ravel(), minlength=self.size).reshape(len(self.C), len(self.F))
@@ -546,6 +481,8 @@ class ContactSystem:
         for i, (C, Z) in enumerate(zip(layer.C, self.Z)):
             self.S[i * nF:(i + 1) * nF, i * nF:(i + 1) * nF] = C @ Z
         self.face_blocks: dict[bytes, np.ndarray] = {}
+        self._S_inv: tuple[np.ndarray, np.ndarray] | None = None
+        self.descents: list[int] = []  # the steps the line-search method settled
         self.max_closure = 0.0  # largest layer compression over the run, in layer thicknesses
         self.energies, self.closed, self.contact_steps, self.last = [], [0.0], [], None
 
@@ -600,34 +537,23 @@ class ContactSystem:
         return np.divide(force, self.M, out=np.zeros_like(force), where=self.M > 0)
 
     def solve(self, predicted: np.ndarray, u: np.ndarray, step_index: int, t: float) -> tuple[np.ndarray, int]:
-        """One step's displacement and its state iterations.
-
-        Iterates ``x -> solve(states_of(x))`` until the states a solution was computed with are
-        its own. Where that cycles (a point at the edge of the contact zone, a slip direction
-        that flips), the next iterates move only a share ``omega`` of the way to the new solution,
-        halved at every cycle: a damped Newton method on the piecewise linear layer law.
-        """
+        """One step's displacement and its state iterations: Newton's method on the layer's law
+        (:meth:`_newton`), or where its iterates do not settle the line-search method of
+        :mod:`smfem.layer_descent` from the step's start (counted in ``info``)."""
         c, layer = self.c, self.layer
         load = self.Q + c.a0 * self.M * predicted
         base = np.concatenate([lu.solve(r) for lu, r in zip(self.lus, self.blocks(load))])
-        states, current, omega, seen = layer.states, None, 1.0, []
-        for iteration in range(1, self.max_state_iterations + 1):
-            new = self._solve(states, base)
+        try:
+            new, iteration, strain, states = self._newton(base, step_index, t)
+        except ContactError as newton:
+            try:
+                new, more = descend(self, base, u, step_index, t)
+            except ContactError as e:
+                raise ContactError(f"{newton}; {e}") from None
+            iteration = self.max_state_iterations + more
+            self.descents.append(step_index)
             strain = layer.strain(new)
-            following = layer.states_of(strain)
-            if following.close_to(states):
-                break
-            seen.append(states)
-            if any(following.close_to(other) for other in seen):
-                if omega <= MIN_RELAXATION:
-                    raise ContactError(f"step {step_index} (t = {t:.6g} s): contact states cycle without "
-                                       f"settling after {iteration} iterations (state chattering)")
-                omega, seen = 0.5 * omega, []
-            current = new if current is None else current + omega * (new - current)
-            states = following if omega == 1.0 else layer.states_of(layer.strain(current))
-        else:
-            raise ContactError(f"step {step_index} (t = {t:.6g} s): contact states did not settle in "
-                               f"{self.max_state_iterations} iterations (state chattering)")
+            states = layer.states_of(strain)
         closure = -(strain[..., NORMAL] + layer.pre_closure)
         self.max_closure = max(self.max_closure, float(closure.max()))
         if closure.max() >= 1.0:
@@ -636,6 +562,53 @@ class ContactSystem:
                                f"or lower dt")
         self.strain, self.states = strain, states
         return new, iteration
+
+    def _newton(self, base: np.ndarray, step_index: int, t: float):
+        """Newton's method on the layer's law from the body's answer ``base`` to the step's load.
+
+        Iterates ``x -> solve(states_of(x))`` until the states a solution was computed with are
+        its own. Where that cycles (a point at the edge of the contact zone, a slip direction
+        that flips), the next iterates move only a share ``omega`` of the way to the new solution,
+        halved at every cycle: a damped Newton method on the piecewise linear layer law. Returns
+        the solution, the iterations, its layer strain and the states it was computed with.
+        """
+        layer = self.layer
+        states, current, omega, seen = layer.states, None, 1.0, []
+        for iteration in range(1, self.max_state_iterations + 1):
+            new = self._solve(states, base)
+            strain = layer.strain(new)
+            following = stick_where_reversed(layer.states_of(strain), states)
+            if following.close_to(states):
+                return new, iteration, strain, states
+            seen.append(states)
+            if any(following.close_to(other) for other in seen):
+                if omega <= MIN_RELAXATION:
+                    raise ContactError(f"step {step_index} (t = {t:.6g} s): contact states cycle without "
+                                       f"settling after {iteration} iterations (state chattering)")
+                omega, seen = 0.5 * omega, []
+            current = new if current is None else current + omega * (new - current)
+            states = following if omega == 1.0 else layer.states_of(layer.strain(current))
+        raise ContactError(f"step {step_index} (t = {t:.6g} s): contact states did not settle in "
+                           f"{self.max_state_iterations} iterations (state chattering)")
+
+    def face_compliance_inverse(self) -> tuple[np.ndarray, np.ndarray]:
+        """The face motions a step can make and the body's stiffness along them: ``U`` (n, r),
+        orthonormal columns spanning the range of ``S`` (a supported dof, or two face dofs
+        that are one reduced dof, as u_r and u_theta of harmonic 1 on the axis, take none), and
+        the inverse eigenvalues ``1 / lambda`` (r,) of ``S`` along them; made once, for
+        :mod:`smfem.layer_descent`."""
+        if self._S_inv is None:
+            n = len(self.layer.F)
+            columns, inverse = [], []
+            for i in range(len(self.Z)):
+                lam, vec = np.linalg.eigh(self.S[i * n:(i + 1) * n, i * n:(i + 1) * n])
+                keep = lam > RANGE_TOL * max(lam.max(initial=0.0), 0.0)
+                block = np.zeros((len(self.S), int(keep.sum())))
+                block[i * n:(i + 1) * n] = vec[:, keep]
+                columns.append(block)
+                inverse.append(1.0 / lam[keep])
+            self._S_inv = np.hstack(columns), np.concatenate(inverse)
+        return self._S_inv
 
     def commit(self, u: np.ndarray) -> None:
         self.layer.commit(self.strain, self.states)
@@ -686,4 +659,6 @@ class ContactSystem:
             "layer_elements": self.layer.n_elements, "layer_points_x3": int(self.layer.states.kind.shape[1]),
             "energy_before": before, "energy_after": after,
             "contact_window": [steps[0] * dt, steps[-1] * dt] if steps else None,
-            "max_layer_compression": self.max_closure, "closed_fraction": self.closed}
+            "max_layer_compression": self.max_closure, "closed_fraction": self.closed,
+            # the steps whose Newton iterates did not settle, solved by the line-search method
+            "line_search_steps": self.descents}

@@ -19,6 +19,8 @@ PROBES = {
     "layered_cylinder": ["A_ur", "B_ut", "C_ur", "I_ur"],
     "flywheel": ["rim_uz_0", "rim_uz_90", "rim_uz_180"],
     "moving_load": ["mid_uz", "q_uz"],
+    "rod_collision": ["contact_p", "target_mid_szz", "striker_vz", "target_vz", "target_end_uz"],
+    "ring_in_ring": ["A_ur", "B_ut", "C_ur", "outer_ur", "outer_stt", "contact_p"],
 }
 
 

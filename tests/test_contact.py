@@ -6,7 +6,8 @@ import pytest
 
 from cases import get_case
 from studies.metrics import moving_average
-from smfem.contact import NORMAL, SHEAR, SLIP, STICK, ContactLayer
+from smfem.contact import ContactLayer
+from smfem.layer_law import NORMAL, SHEAR, SLIP, STICK
 from smfem.model import Model
 from smfem.options import SolverOptions
 from smfem.solver import solve
@@ -115,24 +116,37 @@ def _with_massive_face(monkeypatch, **sets):
     return solve(get_case("rod_impact", sets))
 
 
-def test_chattering_states_are_reported(monkeypatch):
-    """States that keep coming back are reported with the step and time, never passed over.
+def test_chattering_states_are_settled_by_the_line_search_or_reported(monkeypatch):
+    """States that keep coming back are settled, or reported with the step and time, never
+    passed over.
 
     The rod on a tilted wall with friction, sampled at 4 layer points per harmonic around the
-    circumference: slip directions at the edge of the contact zone flip between Newton
-    iterates (measured: a 2-cycle at step 344); the damped iteration settles them (default),
-    and with damping forbidden the cycle is reported.
+    circumference: slip directions at the edge of the contact zone flipped between Newton
+    iterates (a 2-cycle at step 344, which damping settled); a point whose slip turns now
+    sticks for the next iterate (:func:`smfem.layer_law.stick_where_reversed`), and the steps
+    settle without damping. Held to 2 Newton iterations, the steps that need more go to the
+    line-search method (:mod:`smfem.layer_descent`), which settles them (the run names them in
+    ``info``, with the same histories to 2.2e-6); with that too held to one iteration, the first such
+    step is reported with both reasons.
     """
     import smfem.contact as contact
+    import smfem.layer_descent as descent
 
-    four = SolverOptions(layer_points_per_harmonic=4)
     case = get_case("rod_impact", {"wall_slope": 0.01, "harmonics": 6, "friction": 0.3})
-    assert solve(case, four).converged
+    newton = solve(case, SolverOptions(layer_points_per_harmonic=4))
+    assert newton.converged and newton.info["line_search_steps"] == []
     monkeypatch.setattr(contact, "MIN_RELAXATION", 1.0)
-    r = solve(case, four)
-    assert not r.converged and "cycle" in r.message and "chattering" in r.message and "step 344" in r.message
-    r = solve(case, SolverOptions(layer_points_per_harmonic=4, max_state_iterations=2))
-    assert not r.converged and "did not settle in 2 iterations" in r.message
+    assert solve(case, SolverOptions(layer_points_per_harmonic=4)).converged
+    two = SolverOptions(layer_points_per_harmonic=4, max_state_iterations=2)
+    r = solve(case, two)
+    assert r.converged and len(r.info["line_search_steps"]) > 0
+    for name in ("contact_p", "rim_uz_0", "rod_vz"):
+        scale = np.abs(newton.history[name]).max()
+        assert np.abs(r.history[name] - newton.history[name]).max() < 1e-5 * scale, name  # measured 2.2e-6
+    monkeypatch.setattr(descent, "MAX_ITERATIONS", 1)
+    r = solve(case, two)
+    assert not r.converged and "did not settle in 2 iterations" in r.message and "line-search" in r.message
+    assert "step" in r.message and "chattering" in r.message
 
 
 def test_energy_created_by_contact_is_reported(monkeypatch):

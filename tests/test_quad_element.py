@@ -300,7 +300,8 @@ def test_the_contact_layer_on_three_node_face_segments_loads_the_face_consistent
     times r): the 6-node layer elements of smfem/contact.py. Two straight 2-node facets per
     segment would give 1:2:1 (measured 0.75 and 1.5 times these forces); the face's lumped
     masses, moved one node row in, keep the body's total."""
-    from smfem.contact import STICK, ContactLayer, LayerStates, face_free_mass
+    from smfem.contact import ContactLayer, face_free_mass
+    from smfem.layer_law import STICK, LayerStates
     from smfem.loads import edge_pressure_vector
 
     case = get_case("rod_impact", {"element": QUAD9})

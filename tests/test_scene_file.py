@@ -20,7 +20,7 @@ from runs.registry import solve
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 #: every field of a Case that a solver reads
 SOLUTION_FIELDS = ("name", "body", "section", "material", "loads", "supports", "probes", "params", "length",
-                   "cutouts", "contrast", "initial_velocity", "wall", "symmetric", "axisymmetric", "regions")
+                   "cutouts", "contrast", "initial_velocity", "wall", "symmetric", "axisymmetric", "regions", "contacts")
 
 #: a scene of one's own: a short elastic prism with a pressure patch on its top face
 USER_SCENE = """\

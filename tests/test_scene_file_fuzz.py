@@ -2,7 +2,8 @@
 one :class:`cases.ParameterError` of one line that names the file, never another exception, and
 nothing in it runs (docs/scenes.md, "Scenes from a file"; issue 36).
 
-The mutations start from the five example files and two with a body force and a traction: keys
+The mutations start from the example files (a scene of two bodies in contact among them,
+tests/test_scene_file_bodies.py mutates it alone) and two with a body force and a traction: keys
 renamed, deleted or added, values replaced by TOML values of any type, and expressions replaced
 by random text or by commands that would create a marker file. Each mutated document is written
 back as TOML (a small writer below) and read by :func:`cases.scene_file.from_text`, which runs
