@@ -88,7 +88,7 @@ from .linalg import factorize_spd
 from .layer_descent import descend
 from .loads import segment_shape_functions
 from .model import ModelError
-from .newmark import Constants, State
+from .newmark import Constants, Load, State
 from .options import SolverOptions
 
 #: the smallest share of a step towards the next iterate before a cycle counts as chattering
@@ -460,7 +460,7 @@ class ContactSystem:
     HOW = ("contact layer (17)-(19): states per layer Gauss point and point along x3, iterated per step; "
            "one factorization per mode, the layer's face matrix by Woodbury")
 
-    def __init__(self, model, dt: float, options: SolverOptions):
+    def __init__(self, model, dt: float, options: SolverOptions, terms=()):
         case = model.case
         p = case.params
         layer = self.layer = ContactLayer(model, p["layer_thickness"], p["layer_stiffness"] * case.material.E,
@@ -468,7 +468,8 @@ class ContactSystem:
         self._velocity_rows: dict = {}
         systems = model.systems
         self.model, self.K, self.max_state_iterations = model, [s.K for s in systems], options.max_state_iterations
-        self.Q = np.concatenate([s.Q for s in systems])
+        #: the load: pressures held from t = 0 and the timed terms (amplitudes, moving loads, forces)
+        self.load = Load(np.concatenate([s.Q for s in systems]), terms)
         self.m_full = [face_free_mass(model, layer.layer_edges, i) for i in range(len(systems))]
         self.M = np.concatenate([s.T.multiply(s.T).T @ m for s, m in zip(systems, self.m_full)])
         self.c = Constants.of(dt)
@@ -533,7 +534,7 @@ class ContactSystem:
     def initial_acceleration(self, u: np.ndarray) -> np.ndarray:
         """``M a = Q - K u``; the massless face nodes carry no initial acceleration."""
         self.strain, self.states = self.layer.strain(u), self.layer.states
-        force = self.Q - self.stiffness_product(u)
+        force = self.load(0.0) - self.stiffness_product(u)
         return np.divide(force, self.M, out=np.zeros_like(force), where=self.M > 0)
 
     def solve(self, predicted: np.ndarray, u: np.ndarray, step_index: int, t: float) -> tuple[np.ndarray, int]:
@@ -541,7 +542,7 @@ class ContactSystem:
         (:meth:`_newton`), or where its iterates do not settle the line-search method of
         :mod:`smfem.layer_descent` from the step's start (counted in ``info``)."""
         c, layer = self.c, self.layer
-        load = self.Q + c.a0 * self.M * predicted
+        load = self.load(t) + c.a0 * self.M * predicted
         base = np.concatenate([lu.solve(r) for lu, r in zip(self.lus, self.blocks(load))])
         try:
             new, iteration, strain, states = self._newton(base, step_index, t)
@@ -650,7 +651,7 @@ class ContactSystem:
         before, after = self.energies[0], self.energy(self.last)
         gain = after / before - 1 if before > 0 else 0.0
         message = ""
-        if not self.model.case.loads and gain > ENERGY_GAIN_LIMIT:
+        if not (self.model.case.loads or self.model.case.forces) and gain > ENERGY_GAIN_LIMIT:
             # nothing does work on the rod: energy can only stay or be dissipated by friction
             message = (f"contact created energy: +{gain:.1%} over the run (a layer too stiff for dt chatters "
                        f"unseen between steps): lower layer_stiffness or dt")

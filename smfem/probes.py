@@ -107,9 +107,10 @@ class ProbeSet:
         self.names = [p.name for p in probes]
         self.fields = [p.field for p in probes]
         rows = [self._rows(p) for p in probes]
-        per_mode = [np.vstack([r[i] for r in rows]) @ s.T for i, s in enumerate(model.systems)]
+        width = 3 * model.mesh.n_nodes
+        per_mode = [np.vstack([r[i] for r in rows] or [np.zeros((0, width))]) @ s.T for i, s in enumerate(model.systems)]
         P = sp.csr_matrix(np.hstack(per_mode))  # acts on the amplitudes of all modes stacked
-        velocity = np.array([f == "v" for f in self.fields])
+        velocity = np.array([f == "v" for f in self.fields], bool)
         self.on_u = sp.csr_matrix(P.multiply(~velocity[:, None]))
         self.on_v = sp.csr_matrix(P.multiply(velocity[:, None])) if velocity.any() else None
 

@@ -101,12 +101,9 @@ def build_system(case, options: SolverOptions):
     if case.wall is not None or case.contacts:
         if plastic:
             raise ModelError(f"{case.name}: contact with plasticity is not supported: set plastic=false")
-        if case.forces or any(load.timed for load in case.loads):
-            raise ModelError(f"{case.name}: with contact, loads are steps held in place: body forces, amplitudes "
-                             "and moving loads are not supported")
         # harmonic 0 alone for an axisymmetric scene, else every mode the wall's symmetry allows
         model = Model(case, nonlinear=not case.axisymmetric)
-        return model, ContactSystem(model, case.dt, options), ContactSystem.HOW
+        return model, ContactSystem(model, case.dt, options, force_terms(case, model)), ContactSystem.HOW
     model = Model(case, nonlinear=plastic)
     coupled = bool(model.coupling)
     kind = options.iteration_matrix

@@ -101,14 +101,16 @@ def test_a_moving_load_the_axisymmetric_reference_cannot_take_is_refused_in_one_
         solve("reference", replace(moving, params={**moving.params, "t_end": moving.dt}))
 
 
-def test_a_wall_takes_held_loads_only():
-    case = get_case("rod_impact", {"t_end": 3e-6})
-    timed = replace(case, loads=(Pressure(1e6, "free", ((0.0, 2 * math.pi),), amplitude=Amplitude(((0, 0), (1, 1)))),))
-    from cases.params import UnsupportedCase
-
-    for solver in ("smfem", "reference"):
-        with pytest.raises(UnsupportedCase, match="steps held in place"):
-            solve(solver, timed)
+def test_smfem_takes_loads_that_vary_in_time_with_contact():
+    """SMFEM's contact system adds the timed terms to its load (a block pushed along a ground
+    in ``tests/test_friction_block_pairs.py`` depends on it); here a pull on the rod's free
+    end ramped on over 3 steps moves it off the wall."""
+    case = get_case("rod_impact", {"t_end": 6e-6, "v0": 1e-9})
+    pull = Pressure(-1e6, "free_end", ((0.0, 2 * math.pi),), amplitude=Amplitude(((0, 0), (3e-6, 1))))
+    run = solve("smfem", replace(case, loads=(pull,)))
+    assert run.converged, run.message
+    assert run.history["rod_vz"][1] > run.history["rod_vz"][0]  # pulled away from the wall (+z)
+    assert run.history["contact_p"][-1] == 0.0
 
 
 def test_a_pulse_from_its_first_point_on_is_the_step():
