@@ -41,7 +41,7 @@ BRONZE = dict(E=1.1e11, nu=0.34, rho=8.8e3)
 
 DEFAULTS = dict(
     dt=2e-5, t_end=4e-3, refine=1, harmonics=40, E=2.1e11, nu=0.3, rho=7.8e3, tau_s=1.7e8, plastic=False,
-    tol=1e-5, dim=2, q=2e6, friction=0.3, layer_thickness=1e-4, layer_stiffness=1.0,
+    tol=1e-5, dim=3, q=2e6, friction=0.3, layer_thickness=1e-4, layer_stiffness=1.0,
 )
 SPECS = dict(
     COMMON,

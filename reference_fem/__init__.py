@@ -7,7 +7,8 @@
 >>> result = solve(get_case("rod_impact"))      # contact with a rigid wall
 
 Contact is node-to-wall with Lagrange multipliers and an active set (:mod:`.contact`), the
-contact nodes made massless by mass redistribution (:mod:`.mass`).
+contact nodes made massless by mass redistribution (:mod:`.mass`); between two bodies
+(``rod_collision``) node-to-node on the same rows and active set (:mod:`.pairs`).
 
 Imports nothing from :mod:`smfem`; sees a scene only through :mod:`cases`.
 """

@@ -1,10 +1,14 @@
-"""Node-to-rigid-wall contact: Lagrange multipliers, primal-dual active set, Coulomb friction.
+"""Node-to-rigid-wall and node-to-node contact: Lagrange multipliers, primal-dual active set,
+Coulomb friction.
 
 Each contact node ``i`` has a normal row and (with friction) ``dim - 1`` tangential rows of the
 constraint matrix ``H`` (free dofs): ``y = H u`` are the node's displacement away from the wall
 (``-n . u_i``) and along the tangents, and ``f = H^T p`` the wall's forces on the body, so
 ``p_n = lambda_i >= 0`` is the normal reaction and ``p_t = tau_i`` the friction force.
-The gap is ``g_i = g0_i + y_n,i >= 0``.
+The gap is ``g_i = g0_i + y_n,i >= 0``. Between two bodies (a contact pair, node ``i`` of one
+face and node ``j`` across it on the other, :mod:`reference_fem.pairs`) the rows are the same
+rows of the relative displacement ``u_i - u_j``: ``y_n = n . (u_j - u_i)``, the forces ``H^T p``
+equal and opposite on the two nodes (momentum is kept), ``n`` the face's outward normal at ``i``.
 
 One step solves ``A u = b + H^T p`` with ``A = K + a0 M`` factorized once. With
 ``u* = A^{-1} b`` and ``W = A^{-1} H^T`` (one back-substitution per row, once),
@@ -27,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .equilibrium import NotConverged
-from .face import tangent_basis
+from .face import tangent_basis, tangent_bases
 
 OPEN, STICK, SLIP = 0, 1, 2
 #: active-set iterations allowed per step before the state counts as chattering
@@ -54,15 +58,17 @@ class WallRows:
         then ``n_tan`` tangential rows per node, node by node (``n_tan = 0`` when frictionless)
     g0 : (n_c,) initial gaps (m)
     nodes : (n_c,) mesh node of each contact node
-    friction : Coulomb coefficient f
+    friction : Coulomb coefficient f: one, or one per contact node (n_c,)
     tol : penetration (and slip) tolerance (m), round-off level
+    others : (n_c,) the node across each contact node on the other body of a pair; None at a wall
     """
 
     H: sp.csr_matrix
     g0: np.ndarray
     nodes: np.ndarray
-    friction: float
+    friction: float | np.ndarray
     tol: float
+    others: np.ndarray | None = None
 
     @property
     def n_c(self) -> int:
@@ -104,6 +110,7 @@ class WallContact:
         # augmentation by each row's own compliance, so that c g and c s are forces
         d = np.diag(self.S)
         self.c = 1.0 / np.where(d > 0, d, 1.0)
+        self.friction = np.broadcast_to(np.asarray(rows.friction, float), (n_c,))
 
     def initial(self) -> ContactState:
         n_c = self.rows.n_c
@@ -160,11 +167,11 @@ class WallContact:
             tau_aug = p[t] - self.c[t] * (y[t] - y_prev[t])
             size = np.linalg.norm(tau_aug, axis=1)
             band = np.where(current.state == SLIP, -FRICTION_RTOL, FRICTION_RTOL)
-            limit = rows.friction * lam_aug * (1 + band) + self.c[t].max(axis=1) * rows.tol
+            limit = self.friction * lam_aug * (1 + band) + self.c[t].max(axis=1) * rows.tol
             slip = closed & (size > limit)
             state[slip] = SLIP
             direction[slip] = -tau_aug[slip] / size[slip, None]
-            kappa[slip] = np.clip(rows.friction * p[:n_c][slip] / size[slip], 0.0, 1.0)
+            kappa[slip] = np.clip(self.friction[slip] * p[:n_c][slip] / size[slip], 0.0, 1.0)
         return ContactState(p, state, direction, kappa)
 
     def _forces(self, s: ContactState, y_star, y_prev) -> np.ndarray:
@@ -189,37 +196,54 @@ class WallContact:
             kPC = kP * self.c[ts][:, None, :]
             E[ts] = np.einsum("kab,kbm->kam", kPC, S[ts])
             E[ts[:, :, None], ts[:, None, :]] += np.eye(self.n_tan) - kP
-            E[ts, slip[:, None]] += self.rows.friction * d
+            E[ts, slip[:, None]] += self.friction[slip, None] * d
             rhs[ts] = -np.einsum("kab,kb->ka", kPC, y_star[ts] - y_prev[ts])
         return np.linalg.solve(E, rhs)
 
 
 def wall_rows(nodes: np.ndarray, normal: np.ndarray, g0: np.ndarray, free: np.ndarray, n_dof: int,
-              friction: float, tol: float) -> WallRows:
+              friction: float | np.ndarray, tol: float, others: np.ndarray | None = None) -> WallRows:
     """Constraint rows of mesh ``nodes`` against a plane wall; ``normal`` is the body's outward one.
 
     Dofs are node-major (``node * dim + component``, scikit-fem's vector elements); rows act on
     the ``free`` dofs (a fixed component does not move). A node whose normal component is
     fixed cannot reach the wall and is left out. Tangential rows only with friction.
+
+    Between two bodies, ``others`` (n_c,) is the node across each of ``nodes`` (a contact pair,
+    :mod:`reference_fem.pairs`): the rows act on the relative displacement ``u_node - u_other``,
+    ``normal`` may be one per node ``(n_c, dim)`` (a curved face) and ``friction`` one per node;
+    a pair is left out where neither node can move along the normal.
     """
-    dim = normal.size
-    directions = np.vstack([-normal] + ([tangent_basis(normal)] if friction > 0 else []))
+    normals = np.atleast_2d(normal)  # (1 or n_c, dim)
+    dim = normals.shape[1]
+    frictional = bool(np.any(np.asarray(friction) > 0))
+    if normals.shape[0] == 1:
+        tangents = tangent_basis(normals[0])[None]
+    else:
+        tangents = tangent_bases(normals)
+    directions = np.concatenate([-normals[:, None, :]] + ([tangents] if frictional else []), axis=1)
     directions = np.where(np.abs(directions) > 1e-12, directions, 0.0)  # round-off of the normal
+    directions = np.broadcast_to(directions, (nodes.size,) + directions.shape[1:])  # (n_c, n_dir, dim)
     where = np.full(n_dof, -1)
     where[free] = np.arange(free.size)
-    cols = where[nodes[:, None] * dim + np.arange(dim)]  # (n_c, dim)
-    movable = np.any((cols >= 0) & (directions[0] != 0), axis=1)
-    nodes, g0, cols = nodes[movable], g0[movable], cols[movable]
-    n_c, n_dir = nodes.size, directions.shape[0]
+    sides = [(nodes, 1.0)] + ([] if others is None else [(others, -1.0)])
+    cols = [where[n[:, None] * dim + np.arange(dim)] for n, _ in sides]  # (n_c, dim) each
+    movable = np.any([np.any((c >= 0) & (directions[:, 0] != 0), axis=1) for c in cols], axis=0)
+    friction = friction if np.ndim(friction) == 0 else np.asarray(friction, float)[movable]
+    nodes, g0, directions = nodes[movable], g0[movable], directions[movable]
+    cols = [c[movable] for c in cols]
+    n_c, n_dir = nodes.size, directions.shape[1]
     # row of (node i, direction k): the normal rows first, then the tangents node by node
     i, k, j = np.meshgrid(np.arange(n_c), np.arange(n_dir), np.arange(dim), indexing="ij")
     row = np.where(k == 0, i, n_c + i * (n_dir - 1) + k - 1)
-    val, col = directions[k, j], cols[i, j]
+    triplets = [((sign * directions[i, k, j]).ravel(), c[i, j].ravel()) for (_, sign), c in zip(sides, cols)]
+    val, col = (np.concatenate(a) for a in zip(*triplets))
+    row = np.tile(row.ravel(), len(sides))
     keep = (col >= 0) & (val != 0)
     if n_c == 0:
         raise ValueError("no node of the face can move towards the wall")
     H = sp.csr_matrix((val[keep], (row[keep], col[keep])), shape=(n_c * n_dir, free.size))
-    return WallRows(H, g0, nodes, friction, tol)
+    return WallRows(H, g0, nodes, friction, tol, None if others is None else others[movable])
 
 
 def _same(a: ContactState, b: ContactState) -> bool:

@@ -31,11 +31,19 @@ Carpenter, Taylor & Katona 1991): a face node predicted through the wall is put 
 along the wall's normal. With a diagonal mass that is the exact multiplier of the constraint,
 ``f_c = M du / dt^2``, and a node leaves the wall when its prediction does (no tension).
 Frictionless walls only.
+
+Contact pairs between bodies (:mod:`reference_fem.pairs`: node ``i`` of a face and node ``j``
+across it) are the same constraint on the relative displacement: a pair predicted through each
+other (``g = g0 + n . (u_j - u_i) < 0``) is put back to touching by the impulse that does it,
+``P = -g / (1 / m_i + 1 / m_j)`` (times dt^2), which moves ``i`` by ``-n P / m_i`` and ``j`` by
+``n P / m_j``: the split by the two lumped masses that keeps the momentum (a node held along
+the normal by a support counts as of infinite mass). With friction the closed pairs' predicted
+relative slip over the step is taken back the same way, by a tangential impulse bounded by
+``f P`` (stick below it, slip at it: Coulomb), so momentum is kept too.
 """
 
 from __future__ import annotations
 
-import math
 import time
 from typing import Callable, Iterator
 
@@ -47,9 +55,11 @@ from cases.params import UnsupportedCase, newmark_only
 from cases.result import RunResult
 
 from . import forms
-from .face import plane_face
+from .face import plane_face, tangent_bases
+from .frames import AXISYMMETRIC
 from .mesh import build_mesh
 from .model import INTORDER, Model
+from .pairs import matched_pairs
 from .probes import Probes
 from .wall import initial_gaps
 
@@ -101,6 +111,7 @@ class ExplicitSystem:
         self._u = np.zeros(free.size)
         self._sigma_of = None  # the u that _sigma belongs to, for elastic runs (computed lazily)
         self.wall = _Wall(model) if model.case.wall is not None else None
+        self.pairs = _Pairs(model) if model.case.contacts else None
 
     @property
     def sigma(self) -> np.ndarray:
@@ -133,7 +144,10 @@ class ExplicitSystem:
 
     def constrain(self, u_new: np.ndarray) -> np.ndarray:
         """The correction that puts the face nodes of ``u_new`` that went through the wall back
-        on it (zero without a wall)."""
+        on it, or the pairs' nodes that went through each other back to touching (zero without
+        contact); the pairs' friction measures the slip from the last state, ``u_n``."""
+        if self.pairs is not None:
+            return self.pairs.correction(u_new, self._u)
         if self.wall is None:
             return np.zeros_like(u_new)
         return self.wall.correction(u_new)
@@ -171,6 +185,63 @@ class _Wall:
         return du
 
 
+class _Pairs:
+    """The contact pairs as a kinematic constraint on their matched nodes' free dofs (module doc)."""
+
+    def __init__(self, model: Model):
+        pairs = matched_pairs(model)  # (the model refuses what pairs are not solved with: plasticity, ...)
+        dim = model.dim
+        join = lambda name: np.concatenate([getattr(p, name) for p in pairs])  # noqa: E731
+        nodes, others, self.normals, self.g0 = join("nodes"), join("others"), join("normals"), join("g0")
+        self.friction = np.concatenate([np.full(p.nodes.size, p.friction) for p in pairs])
+        where = np.full(model.basis.N, -1)
+        where[model.free] = np.arange(model.free.size)
+        mass = model.M.diagonal()  # lumped: one per dof, alike for a node's components
+        along = self.normals != 0
+        self.cols, self.w = [], []
+        for side in (nodes, others):
+            cols = where[side[:, None] * dim + np.arange(dim)]  # (n, dim) free index or -1
+            # a node moves along the normal only if every dof with a normal component is free
+            movable = np.all((cols >= 0) | ~along, axis=1)
+            self.cols.append(cols)
+            self.w.append(np.where(movable, 1.0 / mass[side * dim], 0.0))  # its inverse mass
+        self.w_sum = self.w[0] + self.w[1]
+        if not np.any(self.w_sum > 0):
+            raise UnsupportedCase("explicit reference: no node of a contact pair's faces can move along their normal")
+        self.w_sum = np.where(self.w_sum > 0, self.w_sum, np.inf)  # both held: never corrected
+        self.tangents = tangent_bases(self.normals) if np.any(self.friction > 0) else None
+        self.n_nodes = int(nodes.size)
+        self.n_pairs = len(pairs)
+
+    def _at(self, u: np.ndarray, side: int) -> np.ndarray:
+        cols = self.cols[side]
+        return np.where(cols >= 0, u[cols], 0.0)
+
+    def correction(self, u: np.ndarray, u_old: np.ndarray) -> np.ndarray:
+        du = np.zeros_like(u)
+        relative = self._at(u, 1) - self._at(u, 0)
+        gap = self.g0 + np.einsum("nk,nk->n", self.normals, relative)
+        closed = np.flatnonzero(gap < 0)
+        if closed.size == 0:
+            return du
+        P = -gap[closed] / self.w_sum[closed]  # the normal impulse times dt
+        push = self.normals[closed] * P[:, None]  # on the other node; minus it on the face's
+        if self.tangents is not None:
+            T = self.tangents[closed]
+            moved = relative[closed] - (self._at(u_old, 1) - self._at(u_old, 0))[closed]
+            slip = -np.einsum("nak,nk->na", T, moved)  # the face node's slip relative to the other
+            tau = slip / self.w_sum[closed, None]
+            size = np.linalg.norm(tau, axis=1)
+            limit = self.friction[closed] * P
+            tau *= np.where(size > limit, limit / np.where(size > 0, size, 1.0), 1.0)[:, None]
+            push = push + np.einsum("nak,na->nk", T, tau)
+        for side, sign in ((0, -1.0), (1, 1.0)):
+            cols = self.cols[side][closed]
+            on = cols >= 0
+            np.add.at(du, cols[on], (sign * push * self.w[side][closed, None])[on])
+        return du
+
+
 def march(system: ExplicitSystem, Q, v0: np.ndarray, dt: float, n_steps: int
           ) -> Iterator[tuple[int, float, np.ndarray, np.ndarray, np.ndarray]]:
     """Yield ``(n, t_n, u_n, v_n, a_n)`` for n = 0 .. ``n_steps`` (free dofs; from rest in
@@ -195,6 +266,17 @@ def march(system: ExplicitSystem, Q, v0: np.ndarray, dt: float, n_steps: int
             yield n, n * dt, u, v, a
             v_half = v + 0.5 * dt * a
         u = u_new + du
+
+
+def _balance(system: ExplicitSystem, u: np.ndarray, v: np.ndarray, when: str) -> dict:
+    """Kinetic plus strain energy and momentum per mesh component of the state ``u``, ``v``."""
+    model = system.model
+    factor = 2 * np.pi if model.rep == AXISYMMETRIC else 1.0
+    p = np.zeros(model.basis.N)
+    p[model.free] = system.m * v
+    # elementwise products, not BLAS dot (its threads stall on a busy machine)
+    energy = 0.5 * factor * float(np.sum(v * system.m * v) + np.sum(u * (system.K @ u)))
+    return {f"energy_{when}": energy, f"momentum_{when}": (factor * p.reshape(-1, model.dim).sum(axis=0)).tolist()}
 
 
 def output_steps(t_out: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -229,7 +311,11 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     cases.result.RunResult; ``iterations`` 1 per output time; ``info``: ``'method'``,
     ``'omega_max'`` (rad/s), ``'critical_step'``, ``'time_step'`` (s), ``'steps'``,
     ``'safety'``, ``'grading'``, ``'bbar'``, the mesh's ``'counts'`` and ``'n_elements'``,
-    ``'cpu_mesh_s'``; with a wall ``'contact_nodes'``.
+    ``'cpu_mesh_s'``; with a wall ``'contact_nodes'``; with contact pairs ``'contact_nodes'``,
+    ``'contact_pairs'`` and the kinetic plus strain energy (J) and the momentum ``m v`` summed
+    per mesh component (kg m/s) at t = 0 and at the last step, ``'energy_before'``,
+    ``'energy_after'``, ``'momentum_before'``, ``'momentum_after'`` (times 2 pi when
+    axisymmetric, as the implicit reference's, :mod:`reference_fem.pairs`).
     """
     from .solver import load_history, output_mesh
 
@@ -277,6 +363,10 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
             "intorder": INTORDER, "counts": rmesh.counts, "cpu_mesh_s": cpu_mesh}
     if system.wall is not None:
         info["contact_nodes"] = system.wall.n_nodes
+    if system.pairs is not None:
+        u, v = u_full[free], v_full[free]
+        info.update(contact_nodes=system.pairs.n_nodes, contact_pairs=system.pairs.n_pairs,
+                    **_balance(system, np.zeros_like(v0), v0, "before"), **_balance(system, u, v, "after"))
     return RunResult(t=t_out, history=dict(zip(probes.names, rows.T)), n_dof=int(free.size),
                      iterations=[1] * n_out, converged=True, message="", cpu_time_s=cpu,
                      mesh=output_mesh(model, u_full, system, v_full), frames=frames, info=info)

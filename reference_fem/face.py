@@ -1,10 +1,13 @@
-"""Plane faces of a model: their nodes, outward normal and area (for walls and face probes)."""
+"""Faces of a model: their nodes, outward normal and area (for walls, contact pairs and face
+probes); a plane face's one normal (:func:`plane_face`), or a curved face's at each node
+(:func:`face_of`)."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 from skfem import FacetBasis
 
 from cases.params import UnsupportedCase
@@ -34,8 +37,32 @@ class PlaneFace:
     area: float
 
 
+@dataclass(frozen=True)
+class Face:
+    """A boundary face of a model's mesh, plane or curved.
+
+    Attributes
+    ----------
+    nodes : (n,) mesh node indices on the face
+    normals : (n, dim) outward unit normal at each node, mesh frame (on a plane face all one)
+    area : face area (m^2; per radian of circumference when axisymmetric)
+    """
+
+    nodes: np.ndarray
+    normals: np.ndarray
+    area: float
+
+
 def plane_face(model, edge: str) -> PlaneFace:
     """The face of ``model`` on section edge ``edge``; raises UnsupportedCase if it is not plane."""
+    face = _plane(model, edge)
+    if face is None:
+        raise UnsupportedCase(f"reference solver: edge {edge!r} is not plane (a wall or face probe needs one)")
+    return face
+
+
+def _plane(model, edge: str) -> PlaneFace | None:
+    """The plane face on ``edge``, or None where it is not plane."""
     mesh = model.rmesh.mesh
     facets = model.edge_facets(edge)
     fb = FacetBasis(mesh, model.element, facets=facets, intorder=INTORDER)
@@ -46,12 +73,47 @@ def plane_face(model, edge: str) -> PlaneFace:
     height = normal @ mesh.doflocs[:, nodes]
     size = np.abs(mesh.doflocs).max()
     if np.abs(n - normal[:, None]).max() > 1e-6 or np.ptp(height) > PLANE_TOL * size:
-        raise UnsupportedCase(f"reference solver: edge {edge!r} is not plane (a wall or face probe needs one)")
+        return None
+    return PlaneFace(nodes, normal, float(height.mean()), _area(model, fb))
+
+
+def _area(model, fb) -> float:
     x = np.asarray(fb.global_coordinates())
     weight = x[0] if model.rep == AXISYMMETRIC else 1.0
-    return PlaneFace(nodes, normal, float(height.mean()), float(np.sum(fb.dx * weight)))
+    return float(np.sum(fb.dx * weight))
+
+
+def face_of(model, edge: str) -> Face:
+    """The face on ``edge`` with a normal at every node: a plane face's one normal
+    (:func:`plane_face`), else each node's from the facets' own quadratic geometry there: the
+    outward normal of every facet at its nodes, averaged over the facets that share a node (a
+    node at a kink gets their bisector)."""
+    plane = _plane(model, edge)
+    if plane is not None:
+        return Face(plane.nodes, np.broadcast_to(plane.normal, (plane.nodes.size, model.dim)), plane.area)
+    mesh, dim = model.rmesh.mesh, model.dim
+    facets = model.edge_facets(edge)
+    # a rule whose points are the facet's own nodes: (0, 1/2, 1) along each of its directions
+    line = np.array([0.0, 0.5, 1.0])
+    points = np.array([g.ravel() for g in np.meshgrid(*([line] * (dim - 1)), indexing="ij")])
+    at_nodes = FacetBasis(mesh, model.element, facets=facets, quadrature=(points, np.ones(points.shape[1])))
+    n = np.asarray(at_nodes.normals).reshape(dim, -1)
+    x = np.asarray(at_nodes.global_coordinates()).reshape(dim, -1)
+    nodes = np.unique(model.basis.get_dofs(facets=facets).all("u^1") // dim)
+    # each point is one of the face's nodes (one body's: no two at one place)
+    which = cKDTree(mesh.doflocs[:, nodes].T).query(x.T)[1]
+    normals = np.zeros((nodes.size, dim))
+    np.add.at(normals, which, n.T)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    fb = FacetBasis(mesh, model.element, facets=facets, intorder=INTORDER)
+    return Face(nodes, normals, _area(model, fb))
 
 
 def tangent_basis(normal: np.ndarray) -> np.ndarray:
     """Orthonormal tangents of a plane with unit ``normal``, shape ``(dim - 1, dim)``."""
     return np.linalg.svd(normal[None, :])[2][1:]
+
+
+def tangent_bases(normals: np.ndarray) -> np.ndarray:
+    """:func:`tangent_basis` of each of ``normals`` (n, dim): ``(n, dim - 1, dim)``."""
+    return np.linalg.svd(normals[:, None, :])[2][:, 1:]

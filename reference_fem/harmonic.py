@@ -41,7 +41,7 @@ from . import regions
 from .frames import AXISYMMETRIC
 from .mesh import Block, assemble_blocks, axis_nodes, mesh_from_points
 from .model import INTORDER
-from .swept import edge_facets, element_nodes, section_elements
+from .swept import edge_facets, element_nodes, pieces, section_elements
 
 #: components of a harmonic's amplitude vector, in dof order: U (x1), W (x2), V (x3)
 N_COMP = 3
@@ -63,6 +63,8 @@ def unsupported_reason(case) -> str | None:
         return "the material varies along x3 (cut-outs)"
     if case.wall is not None:
         return "contact with a wall is not linear"
+    if case.contacts:
+        return "contact between bodies is not linear"
     if case.material.plastic:
         return "plasticity couples the harmonics"
     if not case.symmetric:
@@ -151,7 +153,8 @@ class HarmonicModel:
         self.section = None
         if sec.kind == "mesh":  # its 9-node elements as they are, split refine x refine
             self.section = section_elements(case)
-            self.mesh = mesh_from_points(element_nodes(case, self.section, None), lambda x: np.ones(x.shape[1], bool))
+            # the section's pieces (bodies) share no node (:func:`reference_fem.swept.pieces`)
+            self.mesh = mesh_from_points(element_nodes(case, self.section, None), groups=pieces(self.section))
         else:
             # the regions' box limits are node lines, as in the reference's own meshes
             boxes = [r for r in case.regions if r.s_range is not None]
@@ -316,7 +319,8 @@ class HarmonicModel:
     def _edge_facets(self, edge: str) -> np.ndarray:
         sec, mesh = self.case.section, self.mesh
         if sec.kind == "mesh":
-            return edge_facets(self.case, AXISYMMETRIC, mesh, self.section, mesh.boundary_facets(), edge)
+            return edge_facets(self.case, AXISYMMETRIC, mesh, self.section, mesh.boundary_facets(), edge,
+                               np.arange(mesh.nelements))  # the section's elements, in their order
         name = sec.edge(edge)
         axis = sec.s if name[0] == "s" else sec.t
         target = axis.span[0] if name.endswith("min") else axis.span[1]

@@ -140,6 +140,9 @@ class RefMesh:
     counts: dict
     #: a mesh section's own quadratic mesh at the case's refinement (its named edges), else None
     section: object = None
+    #: with ``section``: the section element each element was made from, ``(n_elements,)`` (its
+    #: named edges' owners and regions: the bodies of a scene of several)
+    parent: np.ndarray | None = None
 
 
 def build_mesh(case, grading: float = 1.0) -> RefMesh:
@@ -235,10 +238,15 @@ def _mesh_section(case, rep: str) -> RefMesh:
         extra = _breaks(case, rep)[2]
         x3 = (_span_nodes(0.0, ring_span(case, rep), extra, theta_step(case)) if case.body == RING
               else _span_nodes(0.0, case.length, extra, swept.median_size(section)))
-    mesh = mesh_from_points(swept.element_nodes(case, section, x3), lambda x: ~_in_cutouts(case, rep, x))
+    x = swept.element_nodes(case, section, x3)
+    parent = swept.element_parents(section, x3)
+    kept = ~_in_cutouts(case, rep, x[:, :, -1])
+    # the section's pieces (the bodies of a scene of several) share no node: nor do their elements here
+    pieces = swept.pieces(section)[parent]
+    mesh = mesh_from_points(x[:, kept], groups=pieces[kept])
     counts = {"section": len(section.elements), **({"x3": len(x3) - 1} if x3 is not None else {}),
               "elements": mesh.nelements}
-    return RefMesh(mesh, rep, counts, section)
+    return RefMesh(mesh, rep, counts, section, parent[kept])
 
 
 @dataclass(frozen=True)
@@ -453,18 +461,24 @@ def assemble_blocks(blocks, keep: Callable[[np.ndarray], np.ndarray]) -> MeshQua
     return mesh_from_points(np.concatenate(xs, axis=1), keep)
 
 
-def mesh_from_points(x: np.ndarray, keep: Callable[[np.ndarray], np.ndarray]) -> MeshQuad2 | MeshHex2:
+def mesh_from_points(x: np.ndarray, keep: Callable[[np.ndarray], np.ndarray] | None = None,
+                     groups: np.ndarray | None = None) -> MeshQuad2 | MeshHex2:
     """Quadratic mesh of elements given by their nodes ``x`` (dim, n_elements, 9 | 27) in the
     order of scikit-fem's reference element (``ElementQuad2`` / ``ElementHex2.doflocs``);
-    ``keep(centres)`` selects the elements. Coincident nodes are merged by position."""
+    ``keep(centres)`` selects the elements (None: all), in their order. Coincident nodes are
+    merged by position, within one of ``groups`` (n_elements,) only when given: two bodies
+    that touch keep a row of nodes each."""
     pdim = x.shape[0]
     elem, lin_cls, quad_cls = (ElementQuad2, MeshQuad1, MeshQuad2Curved) if pdim == 2 else (ElementHex2, MeshHex1, MeshHex2Curved)
     ref = elem.doflocs
-    x = x[:, keep(x[:, :, -1])]
+    if keep is not None:
+        kept = keep(x[:, :, -1])
+        x, groups = x[:, kept], None if groups is None else np.asarray(groups)[kept]
     x = _positively_oriented(x, ref)
     n_vert = elem.refdom.nnodes
     scale = np.abs(x).max()
-    vid, p = _merge(x[:, :, :n_vert].reshape(x.shape[0], -1), scale)
+    group = None if groups is None else np.repeat(np.asarray(groups, np.int64), n_vert)
+    vid, p = _merge(x[:, :, :n_vert].reshape(x.shape[0], -1), scale, group)
     lin = lin_cls(np.ascontiguousarray(p), np.ascontiguousarray(vid.reshape(-1, n_vert).T))
     mesh = quad_cls.from_mesh(lin)
     doflocs = mesh.doflocs.copy()
@@ -472,9 +486,12 @@ def mesh_from_points(x: np.ndarray, keep: Callable[[np.ndarray], np.ndarray]) ->
     return replace(mesh, doflocs=doflocs)
 
 
-def _merge(points: np.ndarray, scale: float):
-    """Ids of coincident points (within 1e-9 ``scale``) and the unique points, ``(dim, m)``."""
+def _merge(points: np.ndarray, scale: float, group: np.ndarray | None = None):
+    """Ids of coincident points (within 1e-9 ``scale``; of one ``group`` (n,) when given) and the
+    unique points, ``(dim, m)``."""
     key = np.round(points / (1e-9 * scale)).astype(np.int64)
+    if group is not None:
+        key = np.vstack([key, group[None, :]])
     _, first, inverse = np.unique(key.T, axis=0, return_index=True, return_inverse=True)
     return inverse.ravel(), points[:, first]
 

@@ -85,6 +85,8 @@ class Model:
         if case.wall is not None and any(load.timed for load in case.loads):
             raise UnsupportedCase("reference solver: with a wall, loads are steps held in place (no amplitude, "
                                   "no moving load) so far")
+        if case.contacts:
+            _refuse_pairs(case)
         #: E and rho's variation along x3 at the quadrature points (n_qp,), or None
         self.factor = case.variation_factor(x3_of(case, self.rep, self.x_qp)) if case.variation else None
         factor = None if self.factor is None else self.factor.reshape(self.basis.dx.shape)
@@ -95,6 +97,9 @@ class Model:
         if case.wall is not None and not lumped:
             self.M = redistributed_mass(self.M, self.basis, self.edge_facets(case.wall.edge), rho, axisym,
                                         INTORDER)
+        if case.contacts and not lumped:  # both faces of every pair: their nodes massless, as at a wall
+            faces = np.concatenate([self.edge_facets(e) for pair in case.contacts for e in (pair.face, pair.other)])
+            self.M = redistributed_mass(self.M, self.basis, faces, rho, axisym, INTORDER)
         self.Q = self._load_vector()
         #: the loads that vary in time (force terms, then pressures with an amplitude or moving)
         #: as callables ``t -> nodal forces`` (full dofs)
@@ -119,7 +124,7 @@ class Model:
         mesh = self.rmesh.mesh
         facets = mesh.boundary_facets()
         if self.case.section.kind == "mesh":
-            return swept.edge_facets(self.case, self.rep, mesh, self.rmesh.section, facets, edge)
+            return swept.edge_facets(self.case, self.rep, mesh, self.rmesh.section, facets, edge, self.rmesh.parent)
         name = self.case.section.edge(edge)
         axis = self.case.section.s if name[0] == "s" else self.case.section.t
         target = axis.span[0] if name.endswith("min") else axis.span[1]
@@ -272,14 +277,52 @@ class Model:
         return np.array(out)
 
     def initial_velocity(self) -> np.ndarray:
-        """The case's uniform initial velocity as a full dof vector, zero on supported dofs (m/s)."""
-        v = np.zeros(self.basis.N)
+        """The case's uniform initial velocity as a full dof vector, zero on supported dofs (m/s):
+        of every node, or of the nodes of its ``region`` (a body of a scene of several). The
+        body component is turned into the mesh frame at each node (a ring's radial one in 3D
+        points away from the axis everywhere); one the 2D representation has no dof for (the
+        hoop velocity of an axisymmetric section) is zero by construction."""
+        v = np.zeros((self.basis.N // self.dim, self.dim))
+        R = None
         for iv in self.case.initial_velocity:
-            for c in self.mesh_components((iv.component,)):
-                v[c :: self.dim] = iv.value
+            if R is None:
+                R = body_rotation(self.case, self.rep, self.rmesh.mesh.doflocs)  # mesh frame -> body, per node
+            nodes = slice(None) if iv.region is None else self.region_nodes(iv.region, "an initial velocity")
+            v[nodes] += iv.value * R[nodes, iv.component - 1, : self.dim]
+        v = v.ravel()
         v[self.fixed] = 0.0
         return v
+
+    def region_nodes(self, name: str, what: str = "it") -> np.ndarray:
+        """The nodes of the elements of a mesh section's region ``name`` (a body of a scene of
+        several); refused in one line (:class:`UnsupportedCase`, naming ``what`` asks for it)
+        where the region has none of its own: a mapped block's, or one bonded to the rest of
+        the section (sharing nodes with it: a region of another material in one body)."""
+        section, parent = self.rmesh.section, self.rmesh.parent
+        if section is None or name not in section.regions:
+            raise UnsupportedCase(f"reference solver: {what} of region {name!r}: the section has no such region")
+        inside = np.isin(parent, section.regions[name])
+        nodes_of = lambda mask: np.unique(self.basis.element_dofs[:, mask] // self.dim)  # noqa: E731
+        nodes = nodes_of(inside)
+        if np.intersect1d(nodes, nodes_of(~inside)).size:
+            raise UnsupportedCase(f"reference solver: {what} of region {name!r}: the region is bonded to the rest of "
+                                  "the section (shares nodes with it): only a body of its own has a velocity and a "
+                                  "mean of its own")
+        return nodes
 
     def nodal_displacement(self, u: np.ndarray) -> np.ndarray:
         """Mesh-frame displacement at the mesh nodes, shape ``(dim, n_nodes)``."""
         return u.reshape(-1, self.dim).T
+
+
+def _refuse_pairs(case) -> None:
+    """Refuse, in one line, the scenes with contact pairs the reference does not solve."""
+    if case.wall is not None:
+        raise UnsupportedCase("reference solver: a wall and contact pairs in one scene are not available so far")
+    if any(getattr(m, "plastic", False) for m in case.materials):
+        raise UnsupportedCase("reference solver: contact with plasticity is not available")
+    if case.variation or case.forces:
+        # the faces' redistributed mass (:mod:`.mass`) takes a density of its own, and a body force's share of a
+        # massless face node would have no inertia to meet it (a spurious stress of b h at the face)
+        raise UnsupportedCase("reference solver: contact pairs with body forces or a material varying along x3 are "
+                              "not available so far")

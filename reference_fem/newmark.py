@@ -63,10 +63,22 @@ def march(system, Q, u0: np.ndarray, v0: np.ndarray, dt: float, n_steps: int,
     u, v = u0.copy(), v0.copy()
     r0 = load(0.0) - system.A @ u0 + system.c * (system.M @ u0)
     # no force, no acceleration: and massless contact nodes (a singular M) need no solve then
-    a = factorize(system.M).solve(r0) if np.any(r0) else np.zeros_like(u0)
+    a = initial_acceleration(system.M, r0) if np.any(r0) else np.zeros_like(u0)
     for n in range(1, n_steps + 1):
         u_new, iterations = system.solve(load(n * dt) + system.M @ (c.a0 * u + c.a2 * v + c.a3 * a), u)
         a_new = c.a0 * (u_new - u) - c.a2 * v - c.a3 * a
         v = v + c.a6 * a + c.a7 * a_new
         u, a = u_new, a_new
         yield n, n * dt, u, v, a, iterations
+
+
+def initial_acceleration(M, r0: np.ndarray) -> np.ndarray:
+    """``M a0 = r0``; the dofs without mass (a contact face's nodes, :mod:`reference_fem.mass`),
+    which follow the body quasi-statically, get none (their first step puts them in place)."""
+    massive = M.diagonal() > 0
+    if massive.all():
+        return factorize(M).solve(r0)
+    on = np.flatnonzero(massive)
+    a = np.zeros_like(r0)
+    a[on] = factorize(M[on][:, on]).solve(r0[on])
+    return a

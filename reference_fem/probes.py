@@ -2,11 +2,13 @@
 
 Kinds: ``'point'`` with field ``'u'`` (interpolated with ``CellBasis.probes``), ``'sigma'``
 and ``'peps'`` (value at the nearest quadrature point); ``'max'`` of ``'peps'`` over all
-quadrature points; ``'edge_mean'`` of the normal stress ``sigma_nn`` on a plane face: the
+quadrature points; ``'edge_mean'`` of the normal stress ``sigma_nn`` on a face: the
 resultant of the consistent nodal reactions ``K u + M a - Q`` of the face's nodes along the
-normal, over the face area (exact for the wall's Lagrange multipliers, which are those
-reactions); ``'body_mean'`` of ``'u'`` or ``'v'``: the mass-weighted mean ``e^T M x / m``,
-``e`` the component's direction at every node (momentum over mass for ``'v'``).
+normal (a curved face's at each node, :func:`reference_fem.face.face_of`), over the face area
+(exact for the Lagrange multipliers of a wall or a contact pair, which are those reactions:
+minus their sum over the area); ``'body_mean'`` of ``'u'`` or ``'v'``: the mass-weighted mean
+``e^T M x / m``, ``e`` the component's direction at every node (momentum over mass for ``'v'``),
+over the nodes of the probe's ``region`` only when it names one (a body of a scene of several).
 Components are 1-based body components (ring: r, z, theta; prism: x1, x2, x3), rotated from
 the mesh frame at the probe point.
 """
@@ -18,7 +20,7 @@ import scipy.sparse as sp
 
 from cases.params import UnsupportedCase
 
-from .face import plane_face
+from .face import face_of
 from .forms import SQRT2
 from .frames import body_point_to_mesh, body_rotation
 
@@ -62,10 +64,12 @@ class Probes:
             return self._face_normal_stress(probe.edge)
         if kind == "body_mean" and fld in ("u", "v"):
             # a sparse row: its product is no BLAS call (whose threads stall on a busy machine)
-            weights = sp.csr_matrix(body_mean_row(model, probe.component[0]))
+            weights = sp.csr_matrix(body_mean_row(model, probe.component[0], probe.region))
             if fld == "u":
                 return lambda u, v, a, s: (weights @ u)[0]
             return lambda u, v, a, s: (weights @ v)[0]
+        if probe.region is not None:
+            raise UnsupportedCase(f"reference solver: probe {probe.name!r}: only a body_mean of u or v takes a region")
         if kind != "point" or fld not in ("u", "sigma", "peps"):
             raise UnsupportedCase(f"reference solver: probe {probe.name!r} ({kind} of {fld}) is not available")
         x = body_point_to_mesh(case, model.rep, probe.point)
@@ -83,21 +87,27 @@ class Probes:
         return lambda u, v, a, s: (R @ mandel_to_tensor(s.stress_at(q)[None, :])[0] @ R.T)[i, j]
 
     def _face_normal_stress(self, edge: str):
-        """``sigma_nn`` averaged over the plane face ``edge``, from the face's nodal reactions."""
+        """``sigma_nn`` averaged over the face ``edge``, from the face's nodal reactions."""
         model = self.model
-        face = plane_face(model, edge)
+        face = face_of(model, edge)
         e = np.zeros((model.basis.N // model.dim, model.dim))
-        e[face.nodes] = face.normal
+        e[face.nodes] = face.normals
         e = e.ravel() / face.area
         k_row, m_row = (sp.csr_matrix(e @ X) for X in (model.stiffness(), model.M))
         q = e @ model.Q
         return lambda u, v, a, s: (k_row @ u + m_row @ a)[0] - q
 
 
-def body_mean_row(model, component: int) -> np.ndarray:
+def body_mean_row(model, component: int, region: str | None = None) -> np.ndarray:
     """The row ``w`` with ``w @ x`` the mass-weighted mean of body ``component`` (1-based) of the
-    full dof vector ``x``: ``e^T M x / m``, ``e`` the component's direction at every node."""
+    full dof vector ``x``: ``e^T M x / m``, ``e`` the component's direction at every node (of
+    ``region``'s nodes only, when given: a body sharing no node with the rest, whose mass rows
+    are its own, :meth:`reference_fem.model.Model.region_nodes`)."""
     R = body_rotation(model.case, model.rep, model.rmesh.mesh.doflocs)
-    e = R[:, component - 1, : model.dim].ravel()
-    mass = model.M @ np.ones(model.basis.N)
-    return (e @ model.M) / mass[:: model.dim].sum()
+    e = R[:, component - 1, : model.dim]
+    nodes = slice(None)
+    if region is not None:
+        nodes = model.region_nodes(region, "a body_mean probe")
+        e = np.where(np.isin(np.arange(e.shape[0]), nodes)[:, None], e, 0.0)
+    mass = (model.M @ np.ones(model.basis.N)).reshape(-1, model.dim)[:, 0]
+    return (e.ravel() @ model.M) / mass[nodes].sum()

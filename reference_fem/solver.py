@@ -18,6 +18,7 @@ from .frames import AXISYMMETRIC, mesh_frame_to_cartesian, to_cartesian
 from .mesh import build_mesh, vtk_cells
 from .model import INTORDER, Model
 from .newmark import march, newmark_constants
+from .pairs import PairLog, case_pair_rows, held_by_supports
 from .probes import Probes, mandel_to_tensor
 from .zones import snapshot as zone_snapshot
 from .wall import ContactLog, WallSystem, case_wall_rows
@@ -26,6 +27,8 @@ from .wall import ContactLog, WallSystem, case_wall_rows
 def _system(model: Model, c: float):
     if model.case.wall is not None:
         return WallSystem(model, c, case_wall_rows(model))
+    if model.case.contacts:  # the wall's system on the pairs' rows (:mod:`.pairs`)
+        return WallSystem(model, c, case_pair_rows(model))
     return Plastic(model, c, model.case.params["tol"]) if model.law.nonlinear else Elastic(model, c)
 
 
@@ -62,8 +65,12 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
         direction), 'factorizations' (of K + a0 M and of tangents), 'cpu_mesh_s'; with a wall
         also 'contact_nodes', 'energy_before' and 'energy_after' (kinetic + strain, J, at t = 0
         and at the last step), 'contact_window' (first and last time with a wall force, s, or
-        None) and 'max_penetration' (m, over all nodes and steps; 0 if none); ``snapshots``: 2D
-        plastic runs only, as :mod:`reference_fem.zones` makes them
+        None) and 'max_penetration' (m, over all nodes and steps; 0 if none); with contact pairs
+        (:mod:`reference_fem.pairs`) the same, the penetration of the pairs' nodes into each
+        other, and 'contact_pairs', 'momentum_before' and 'momentum_after' (``M v`` summed per
+        mesh component, kg m/s, times 2 pi when axisymmetric), 'most_nodes_closed',
+        'most_nodes_stick' and 'most_nodes_slip' (at any one step); ``snapshots``: 2D plastic runs only, as
+        :mod:`reference_fem.zones` makes them
 
     Raises
     ------
@@ -85,7 +92,9 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     u_full, v_full, a_full = (np.zeros(model.basis.N) for _ in range(3))
     zero, v0 = np.zeros(free.size), model.initial_velocity()[free]
     v_full[free] = v0
-    log = ContactLog(system, model.rep == AXISYMMETRIC) if case.wall is not None else None
+    per_radian = model.rep == AXISYMMETRIC
+    log = (PairLog(system, per_radian) if case.contacts
+           else ContactLog(system, per_radian) if case.wall is not None else None)
     if log:
         log.record(0.0, zero, v0, u_full)
     plastic_2d = case.material.plastic and model.dim == 2  # the zones are drawn in a plane
@@ -116,7 +125,10 @@ def static(case, factors=(1.0,)) -> tuple[Model, list[np.ndarray], list[int], ob
 
     Plastic cases are loaded incrementally (each factor is one load step, the state carried
     over). In-plane rigid-body motion of rings that are not axisymmetric is removed as in
-    :class:`~reference_fem.model.Model` (``fix_rigid_body``).
+    :class:`~reference_fem.model.Model` (``fix_rigid_body``). Contact pairs are solved as in a
+    time step (:mod:`reference_fem.pairs`, the contact state carried from one factor to the
+    next); every body must then be supported on its own (a body held by contact alone has no
+    static state here: refused in one line).
 
     Returns
     -------
@@ -130,6 +142,8 @@ def static(case, factors=(1.0,)) -> tuple[Model, list[np.ndarray], list[int], ob
     model = Model(case, fix_rigid_body=True)
     if model.timed_terms:
         raise UnsupportedCase("reference solver: a static solve takes loads held in place; this case's vary in time")
+    if case.contacts:
+        held_by_supports(model)
     system = _system(model, 0.0)
     u = np.zeros(model.free.size)
     out, iterations = [], []

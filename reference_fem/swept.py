@@ -10,12 +10,17 @@ ring gets ``N_THETA * refine`` elements, a prism's span elements as long as the 
 median element. Break points (load patches, cut-outs, probes) along x3 are element boundaries.
 
 Named edges are found by the section's own segments: a boundary facet lies on edge ``name``
-when the section points of its vertices are the two ends of one of that edge's segments.
+when the section points of its vertices are the two ends of one of that edge's segments and its
+element was made from that segment's element (two bodies that touch have a face each at the
+same points). The section's pieces (the bodies of a scene of several, :mod:`cases.bodies`)
+share no node, and neither do their elements here (:func:`pieces`).
 """
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 from skfem import ElementHex2
 
 from cases.geometry import RING
@@ -68,20 +73,42 @@ def element_nodes(case, section, x3: np.ndarray | None) -> np.ndarray:
     return out.reshape(3, -1, 27)
 
 
-def edge_facets(case, rep: str, mesh, section, facets: np.ndarray, edge: str) -> np.ndarray:
+def element_parents(section, x3: np.ndarray | None) -> np.ndarray:
+    """The section element each element of :func:`element_nodes` is made from, ``(n_elements,)``."""
+    return np.tile(np.arange(len(section.elements)), 1 if x3 is None else len(x3) - 1)
+
+
+def pieces(section) -> np.ndarray:
+    """The connected piece of the section each of its elements is in, ``(n_elements,)``:
+    elements sharing a node are of one piece; the bodies of a scene of several share none."""
+    n_el, n_nodes = section.elements.shape[0], len(section.x)
+    el = np.repeat(np.arange(n_el), section.elements.shape[1])
+    graph = sp.coo_matrix((np.ones(el.size), (el, n_el + section.elements.ravel())),
+                          shape=(n_el + n_nodes,) * 2)
+    return connected_components(graph, directed=False)[1][:n_el]
+
+
+def edge_facets(case, rep: str, mesh, section, facets: np.ndarray, edge: str,
+                parent: np.ndarray | None = None) -> np.ndarray:
     """Those of boundary ``facets`` of a reference ``mesh`` (representation ``rep``) that lie on
     the mesh section's edge ``edge``; ``section``: the section's quadratic mesh the reference
-    mesh was made from."""
-    seg, _ = section.edge_segments(edge)
+    mesh was made from; ``parent`` (n_elements,): the section element of each element of
+    ``mesh`` (:func:`element_parents`), when given a facet must also be of its segment's element
+    (a face of another body at the same points is not on the edge)."""
+    seg, owner = section.edge_segments(edge)
     scale = 1e-7 * np.abs(section.x).max()
     key = lambda p: [tuple(k) for k in np.round(np.asarray(p) / scale).astype(np.int64)]  # noqa: E731
-    ends = {frozenset(pair) for pair in zip(key(section.x[seg[:, 0]]), key(section.x[seg[:, -1]]))}
+    ends = {frozenset(pair): o for pair, o in zip(zip(key(section.x[seg[:, 0]]), key(section.x[seg[:, -1]])),
+                                                 np.asarray(owner).tolist())}
     corners = mesh.p[:, mesh.facets[:, facets].T]  # (dim, n_facets, n_vertices)
     xc = to_cartesian(case, rep, corners.reshape(corners.shape[0], -1))
     x1, x2 = (np.hypot(xc[0], xc[1]), xc[2]) if case.body == RING else (xc[1], xc[2])
     points = key(np.column_stack([x1, x2]))
     n = corners.shape[2]
     on = [frozenset(points[i * n:(i + 1) * n]) in ends for i in range(len(facets))]
+    if parent is not None:
+        element = mesh.f2t[0, facets]  # a boundary facet's one element
+        on = [hit and ends[frozenset(points[i * n:(i + 1) * n])] == parent[element[i]] for i, hit in enumerate(on)]
     found = facets[np.array(on, bool)]
     if found.size == 0:
         raise ValueError(f"reference solver: edge {edge!r} has no boundary facets")

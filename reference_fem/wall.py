@@ -1,6 +1,9 @@
-"""An elastic body against the case's rigid wall: the equilibrium system of a contact step."""
+"""An elastic body against the case's rigid wall: the equilibrium system of a contact step (and
+of a step with contact pairs between bodies, on their rows: :mod:`reference_fem.pairs`)."""
 
 from __future__ import annotations
+
+import functools
 
 import numpy as np
 
@@ -68,17 +71,27 @@ class ContactLog:
 
     Energies are kinetic plus strain energy ``(v M v + u K u) / 2`` of the whole body (J;
     axisymmetric values are per radian times 2 pi), at t = 0 and at the last step.
+    (:class:`reference_fem.pairs.PairLog`: the same of a scene with contact pairs.)
     """
 
     def __init__(self, system: WallSystem, per_radian: bool):
         self.system = system
-        model = system.model
-        self.face = plane_face(model, model.case.wall.edge)
-        self.gap = initial_gaps(model, self.face, np.arange(model.rmesh.mesh.doflocs.shape[1]))  # every node
         self.factor = 2 * np.pi if per_radian else 1.0
         self.energy = []
         self.contact_times = []
         self.max_penetration = 0.0
+
+    @functools.cached_property
+    def face(self):
+        """The wall's face (:func:`~reference_fem.face.plane_face`)."""
+        model = self.system.model
+        return plane_face(model, model.case.wall.edge)
+
+    @functools.cached_property
+    def gap(self) -> np.ndarray:
+        """The wall's initial gap at every node."""
+        model = self.system.model
+        return initial_gaps(model, self.face, np.arange(model.rmesh.mesh.doflocs.shape[1]))
 
     def record(self, t: float, u: np.ndarray, v: np.ndarray, u_full: np.ndarray) -> None:
         """Log the state ``u``, ``v`` (free dofs; ``u_full`` all dofs) at time ``t``."""

@@ -5,7 +5,6 @@ prism: span-height).
 
 from __future__ import annotations
 
-import numpy as np
 
 from cases.result import ZoneSnapshot
 

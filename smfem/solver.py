@@ -137,7 +137,8 @@ def build_system(case, options: SolverOptions):
 def gauss_system(case, options: SolverOptions, plastic: bool):
     """:func:`build_system` for ``time_scheme=gauss``: the linear system factorized whole, or a
     :class:`ModelError` that says why not."""
-    refused = ("plasticity" if plastic else "contact" if case.wall is not None or case.contacts else
+    refused = ("plasticity" if plastic else "a rigid wall" if case.wall is not None else
+               "contact between bodies" if case.contacts else
                f"iteration_matrix={options.iteration_matrix}" if options.iteration_matrix not in ("auto", "coupled")
                else "")
     if refused:

@@ -35,9 +35,12 @@ def case_definition(case) -> dict:
     for name in ("title", "provenance", "source", "units", "references"):
         d.pop(name, None)
     d["references"] = {k: case.references[k] for k in TRUTH_REFERENCES if k in case.references}
-    for name in ("forces", "variation", "exact", "regions"):  # features a scene may leave out: absent, as before they existed
+    for name in ("forces", "variation", "exact", "regions", "contacts"):  # features a scene may leave out: absent, as before they existed
         if not d.get(name):
             d.pop(name, None)
+    for item in [*d["probes"], *d["initial_velocity"]]:  # the whole body: as before regions could be named
+        if item.get("region") is None:
+            item.pop("region", None)
     for load in [*d["loads"], *d.get("forces", ())]:  # a step held in place: as before loads had a history
         if load.get("amplitude") is None:
             load.pop("amplitude", None)

@@ -105,6 +105,9 @@ def test_every_exported_deck_runs_in_ccx(name, tmp_path):
     # the flywheel's 3D deck (51,712 C3D20) is minutes and 8 GB in ccx: its axisymmetric deck
     # takes the same mesh-section path
     light = {"patch_deg": 180.0, "dim": 2} if name == "flywheel" else {}
+    if get_case(name).contacts:  # contact between bodies is not in the deck: export refuses it in one line
+        assert main(["export", name, "--out", str(tmp_path)]) == 2
+        return
     case = get_case(name, {**light, "t_end": 3 * get_case(name).dt})
     sets = [arg for k, v in light.items() for arg in ("--set", f"{k}={v!r}")]
     assert main(["export", name, "--set", f"t_end={case.t_end!r}", *sets, "--out", str(tmp_path)]) == 0

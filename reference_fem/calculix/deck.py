@@ -93,6 +93,8 @@ def build_deck(case, every: int = 1) -> Deck:
         raise UnsupportedCase("calculix: a tilted wall (wall_slope > 0) is not exported; use wall_slope=0")
     if case.wall is not None and case.material.plastic:
         raise UnsupportedCase("calculix: contact with plasticity is not exported (as in the reference FEM)")
+    if case.contacts:
+        raise UnsupportedCase("calculix: contact between bodies (contact pairs) is not exported so far")
     for mat in case.materials:
         _law_cards(mat)
     if case.variation:
