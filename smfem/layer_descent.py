@@ -21,8 +21,9 @@ friction limits ``l = f |sigma_n|`` held, the layer's law is Tresca's, which has
 of its trial shear stress ``t = G (gamma - slip)`` within the limit, ``l |t| / G - l^2 / (2 G)``
 beyond it; nothing where open. Newton's step of ``Pi`` (the stick or slip tangent, without
 Coulomb's normal coupling) is a descent direction; it is shortened until ``Pi`` falls enough
-(Armijo), and ``l`` is updated from each accepted iterate. Settled: a full step that moves
-the face by round-off only with the limits unchanged, so Coulomb's law holds at the end.
+(Armijo) until ``Pi`` is at its minimum (Newton's step from there is round-off); then ``l`` is
+updated from the normal stresses there and ``Pi`` minimized again. Settled: the limits the
+minimum sets are those it was found with, so Coulomb's law holds at the end.
 """
 
 from __future__ import annotations
@@ -35,6 +36,11 @@ from .layer_law import CLOSURE_TOL, NORMAL, SHEAR, ContactError
 ARMIJO = 1e-4
 #: the shortest step tried along a Newton direction
 SHORTEST = 2.0**-30
+#: the strain within which the tangent takes a point as closed (as sticking): 1e-10 m across a
+#: 0.1 mm layer, far below a contact's own strain (its stress over E_l, 5e-6 at 1 MPa)
+EDGE_BAND = 1e-6
+#: the relative round-off of the step's energy
+ROUNDOFF = 1e-12
 #: iterations allowed to one step
 MAX_ITERATIONS = 500
 #: settled: the last full step and the limits' change, relative to the face motion and limits
@@ -43,7 +49,12 @@ TOLERANCE = 1e-10
 
 def tresca(layer, strain: np.ndarray, limits: np.ndarray):
     """Stress (n_points, n_x3, 6), tangent (.., 6, 6) and energy density (n_points, n_x3) of
-    every layer point at ``strain`` with the friction limits ``limits`` held."""
+    every layer point at ``strain`` with the friction limits ``limits`` held.
+
+    The tangent takes a point within :data:`EDGE_BAND` of closing as closed, and one within it
+    of sticking as sticking: at the edge (two faces that touch at a step's start; a point a
+    line search stopped at) a tangent without its stiffness sends Newton's step through the
+    other face, the line search stops it at the edge again, and the iterates stall there."""
     closure = strain[..., NORMAL] + layer.pre_closure
     closed = closure < -CLOSURE_TOL
     E, G = layer.E, layer.G
@@ -58,14 +69,14 @@ def tresca(layer, strain: np.ndarray, limits: np.ndarray):
     sigma[..., SHEAR] = np.where(closed[..., None], kappa[..., None] * trial, 0.0)
     energy = np.where(closed, 0.5 * E * closure**2, 0.0) + np.where(
         slipping, (limits * size - 0.5 * limits**2) / G, np.where(closed, 0.5 * size**2 / G, 0.0))
+    near = closure < -CLOSURE_TOL + EDGE_BAND
+    sticking = near & ~(slipping & (size > limits + G * EDGE_BAND))
     D = np.zeros(strain.shape + (6,))
-    D[..., NORMAL, NORMAL] = np.where(closed, E, 0.0)
+    D[..., NORMAL, NORMAL] = np.where(near, E, 0.0)
     for k, row in enumerate(SHEAR):
         for m, col in enumerate(SHEAR):
-            turn = kappa * G * ((k == m) - d[..., k] * d[..., m])
-            D[..., row, col] = np.where(closed, turn, 0.0)
-    for k, row in enumerate(SHEAR):  # Coulomb's normal coupling (used for the direction only)
-        D[..., row, NORMAL] = np.where(slipping & (limits > 0), -layer.f * E * d[..., k], 0.0)
+            turn = np.where(sticking, G * (k == m), kappa * G * ((k == m) - d[..., k] * d[..., m]))
+            D[..., row, col] = np.where(near, turn, 0.0)
     return sigma, D, energy
 
 
@@ -94,18 +105,27 @@ def descend(system, y: np.ndarray, start: np.ndarray, step_index: int, t: float)
         gradient = stiffness * (a - target) + U.T @ layer.face_force(sigma).ravel()
         step = -np.linalg.solve(np.diag(stiffness) + U.T @ layer.face_matrix(None, D) @ U, gradient)
         slope = float(gradient @ step)
+        # Pi's round-off: its parts are far larger than what a last step changes (the layer is
+        # 1e4 times stiffer than the body), so a decrease below it is no decrease to test
+        noise = ROUNDOFF * (abs(pi) + 0.5 * target @ (stiffness * target))
         alpha = 1.0
-        while alpha >= SHORTEST and energy(a + alpha * step)[0] > pi + ARMIJO * alpha * slope:
+        while alpha >= SHORTEST and energy(a + alpha * step)[0] > pi + ARMIJO * alpha * slope + noise:
             alpha *= 0.5
-        if alpha < SHORTEST:  # no descent along Newton's direction: round-off at the minimum
+        # at the minimum: Newton's step is round-off, or what it could still gain (its decrement,
+        # -slope / 2) is below Pi's round-off
+        small = np.abs(step).max() <= TOLERANCE * max(np.abs(a).max(), layer.h) or -slope <= noise
+        if alpha < SHORTEST:  # no descent along Newton's direction: at the minimum, or stuck
+            if not small:
+                raise ContactError(f"step {step_index} (t = {t:.6g} s): the line search found no descent "
+                                   "(state chattering)")
             alpha = 0.0
         a = a + alpha * step
+        if not small:  # Pi at these limits not minimized yet: hold them (a moving target cycles)
+            continue
         new = friction_limits(layer, layer.face_strain((U @ a).reshape(shape)))
-        moved = np.abs(alpha * step).max() <= TOLERANCE * max(np.abs(a).max(), layer.h)
-        held = np.abs(new - limits).max(initial=0.0) <= TOLERANCE * max(np.abs(new).max(initial=0.0), 1.0)
+        if np.abs(new - limits).max(initial=0.0) <= TOLERANCE * max(np.abs(new).max(initial=0.0), 1.0):
+            break  # the minimum of Pi at the limits its own normal stresses set: Coulomb's law
         limits = new
-        if moved and held:
-            break
     else:
         raise ContactError(f"step {step_index} (t = {t:.6g} s): contact states did not settle in {MAX_ITERATIONS} "
                            "iterations of the line-search Newton method either (state chattering)")
