@@ -315,6 +315,14 @@ def full() -> tuple[CaseStudy, ...]:
             _s(CALCULIX, {}),
         ), reference=(REF2D, {"refine": 8}),
             truth=explicit_truth()),
+        # contact between bodies: no 3D reference (a section of bodies reaching the axis has no
+        # swept form) and no CalculiX (its export refuses contact pairs)
+        CaseStudy("rod_collision", (
+            _s(SMFEM, *grid("rod_collision", _r(1, 2, 4), (1, 2, 4, 8))),
+            _s(SMFEM_QUAD9, *grid("rod_collision", _r(1, 2), (1, 2, 4, 8))),
+            _s(REF2D, *grid("rod_collision", _r(1, 2, 4), (1, 2, 4, 8))),
+        ), reference=(REF2D, {"refine": 4}),
+            truth=explicit_truth()),
         CaseStudy("layered_cylinder", (
             _s(SMFEM, *grid("layered_cylinder", ({"harmonics": 20}, {"refine": 2, "harmonics": 40},
                                                  {"refine": 4, "harmonics": 80}), (1, 2, 4, 8, 16))),

@@ -9,6 +9,7 @@ and :data:`METHOD_VERSION`, raised whenever the truth's numerics change what the
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import hashlib
 import json
@@ -29,7 +30,11 @@ TRUTH_REFERENCES = ("comparison_window_s", "singular_probes")
 def case_definition(case) -> dict:
     """The parts of ``case`` a truth depends on, as plain data."""
     mesh = getattr(case.section, "kind", "") == "mesh"  # its arrays by digest: numpy's text of them is cut short
-    d = dataclasses.asdict(dataclasses.replace(case, source=None, **({"section": None} if mesh else {})))
+    shallow = copy.copy(case)  # not dataclasses.replace: a case without its section is no valid case
+    object.__setattr__(shallow, "source", None)
+    if mesh:
+        object.__setattr__(shallow, "section", None)
+    d = dataclasses.asdict(shallow)
     if mesh:
         d["section"] = {"mesh": case.section.digest()}
     for name in ("title", "provenance", "source", "units", "references"):

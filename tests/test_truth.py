@@ -396,6 +396,10 @@ def test_explicit_plans_and_their_second_paths():
 # -- stored truths ---------------------------------------------------------------------------------
 SCENES = ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact", "layered_cylinder", "flywheel",
           "layered_cylinder_pulse", "moving_load", "moving_load_notched")
+#: stored truths of scenes still in progress (issue 39): their key and calibration are checked,
+#: not yet their sharpness or front (rod_collision's target_mid_szz does not converge over the
+#: explicit ladder; no report has measured its front)
+IN_PROGRESS = ("rod_collision",)
 
 
 def _stored(name):
@@ -417,7 +421,7 @@ def test_a_truths_key_follows_the_case_and_the_method():
     assert key_of(replace(case, title="another title"), plan) == key_of(case, plan)
 
 
-@pytest.mark.parametrize("name", SCENES)
+@pytest.mark.parametrize("name", SCENES + IN_PROGRESS)
 def test_stored_truth_key_matches_its_case(name):
     """A stored truth stands only for the case and method it was made for: when a scene or the
     truth method changes, this fails until ``smfem truth NAME --full`` is run again."""
@@ -463,7 +467,7 @@ def test_stored_truth_is_sharp_enough_to_judge_its_scene(name):
             assert u <= 1e-2, (probe.name, u)
 
 
-@pytest.mark.parametrize("name", SCENES)
+@pytest.mark.parametrize("name", SCENES + IN_PROGRESS)
 def test_calibration_of_the_stored_truth(name):
     """The distance to the second path, recomputed from the two stored histories, is the one
     recorded; every probe's uncertainty covers it (with the second path's) and is at most three
