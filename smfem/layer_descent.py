@@ -51,32 +51,36 @@ def tresca(layer, strain: np.ndarray, limits: np.ndarray):
     """Stress (n_points, n_x3, 6), tangent (.., 6, 6) and energy density (n_points, n_x3) of
     every layer point at ``strain`` with the friction limits ``limits`` held.
 
-    The tangent takes a point within :data:`EDGE_BAND` of closing as closed, and one within it
-    of sticking as sticking: at the edge (two faces that touch at a step's start; a point a
-    line search stopped at) a tangent without its stiffness sends Newton's step through the
-    other face, the line search stops it at the edge again, and the iterates stall there."""
+    Tresca's friction acts where its limit is set, whether the point is closed at ``strain`` or
+    not (at the settled step a point's limit is its own ``f |sigma_n|``, zero where open): tied
+    to the closure, the energy would jump where a point with a limit opened, and the line
+    search would stall at the jump. The tangent takes a point within :data:`EDGE_BAND` of
+    closing as closed, and one within it of sticking as sticking: at the edge (two faces that
+    touch at a step's start; a point a line search stopped at) a tangent without its stiffness
+    sends Newton's step through the other face, and the iterates stall there."""
     closure = strain[..., NORMAL] + layer.pre_closure
     closed = closure < -CLOSURE_TOL
     E, G = layer.E, layer.G
     trial = G * (strain[..., SHEAR] - layer.slip_strain)
     size = np.linalg.norm(trial, axis=-1)
-    slipping = closed & (size > limits)
+    rubbing = limits > 0
+    slipping = rubbing & (size > limits)
     safe = np.where(slipping, size, 1.0)
     d = np.where(slipping[..., None], trial / safe[..., None], 0.0)
     kappa = np.where(slipping, limits / safe, 1.0)
     sigma = np.zeros(strain.shape)
     sigma[..., NORMAL] = np.where(closed, E * closure, 0.0)
-    sigma[..., SHEAR] = np.where(closed[..., None], kappa[..., None] * trial, 0.0)
+    sigma[..., SHEAR] = np.where(rubbing[..., None], kappa[..., None] * trial, 0.0)
     energy = np.where(closed, 0.5 * E * closure**2, 0.0) + np.where(
-        slipping, (limits * size - 0.5 * limits**2) / G, np.where(closed, 0.5 * size**2 / G, 0.0))
+        slipping, (limits * size - 0.5 * limits**2) / G, np.where(rubbing, 0.5 * size**2 / G, 0.0))
     near = closure < -CLOSURE_TOL + EDGE_BAND
-    sticking = near & ~(slipping & (size > limits + G * EDGE_BAND))
+    sticking = rubbing & ~(slipping & (size > limits + G * EDGE_BAND))
     D = np.zeros(strain.shape + (6,))
     D[..., NORMAL, NORMAL] = np.where(near, E, 0.0)
     for k, row in enumerate(SHEAR):
         for m, col in enumerate(SHEAR):
             turn = np.where(sticking, G * (k == m), kappa * G * ((k == m) - d[..., k] * d[..., m]))
-            D[..., row, col] = np.where(near, turn, 0.0)
+            D[..., row, col] = np.where(rubbing, turn, 0.0)
     return sigma, D, energy
 
 
