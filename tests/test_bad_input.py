@@ -250,7 +250,7 @@ def check_run(name, solver, sets):
     return code
 
 
-@settings(max_examples=80, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(valid_run())
 def test_valid_parameters_give_finite_histories_or_a_clear_error(run):
     check_run(*run)

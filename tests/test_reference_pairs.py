@@ -341,6 +341,7 @@ def _exchange(res, case) -> tuple[float, float]:
     return gained, -area * trapezoid(res.history["contact_p"], res.t)
 
 
+@pytest.mark.slow  # 3D implicit: 10 CPU s with its fixture (the explicit 3D pair below is a default test)
 def test_rings_3d_closing_a_clearance_keep_momentum(ring_runs):
     """Every run: the clearance closes (at 2.1 us: 2e-5 m at 10 m/s) and opens again (5.6 us), no
     penetration, the total momentum kept to round-off (its axial part 0.441 kg m/s). Frictionless,
@@ -356,6 +357,7 @@ def test_rings_3d_closing_a_clearance_keep_momentum(ring_runs):
     assert free.history["inner_vz"] == pytest.approx(1.0, rel=1e-10)
 
 
+@pytest.mark.slow  # 3D implicit: 10 CPU s with its fixture (the explicit 3D pair below is a default test)
 def test_rings_3d_slip_and_stick(ring_runs):
     """f = 0.01: every closed node slips along the axis all through the contact, so the axial
     momentum the outer ring takes is f times the normal impulse (0.041 kg m/s, measured to 1e-13:
