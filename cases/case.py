@@ -77,18 +77,15 @@ class Case:
 
             raise UnsupportedCase(f"{self.name}: region {missing!r} names a physical surface, which this section "
                                   f"has not (a mapped block has none: give the region s_range and t_range)")
-        unknown = next((v for v in self.initial_velocity if v.region is not None and v.region not in surfaces), None)
+        # what names a region (a body) by the name the section must have
+        named = ([(f"an initial velocity is given to region {v.region!r}", v.region) for v in self.initial_velocity]
+                 + [(f"probe {p.name!r} averages over region {p.region!r}", p.region) for p in self.probes])
+        unknown = next((what for what, region in named if region is not None and region not in surfaces), None)
         if unknown is not None:
             from .params import UnsupportedCase
 
-            raise UnsupportedCase(f"{self.name}: an initial velocity is given to region {unknown.region!r}, which the "
-                                  f"section has not (its regions: {', '.join(surfaces) or 'none'})")
-        unknown = next((p for p in self.probes if p.region is not None and p.region not in surfaces), None)
-        if unknown is not None:
-            from .params import UnsupportedCase
-
-            raise UnsupportedCase(f"{self.name}: probe {unknown.name!r} averages over region {unknown.region!r}, which "
-                                  f"the section has not (its regions: {', '.join(surfaces) or 'none'})")
+            raise UnsupportedCase(f"{self.name}: {unknown}, which the section has not (its regions: "
+                                  f"{', '.join(surfaces) or 'none'})")
         if self.contacts:
             from .bodies import check_pairs
 

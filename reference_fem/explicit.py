@@ -59,7 +59,7 @@ from .face import plane_face, tangent_bases
 from .frames import AXISYMMETRIC
 from .mesh import build_mesh
 from .model import INTORDER, Model
-from .pairs import matched_pairs
+from .pairs import all_pairs
 from .probes import Probes
 from .wall import initial_gaps
 
@@ -189,11 +189,9 @@ class _Pairs:
     """The contact pairs as a kinematic constraint on their matched nodes' free dofs (module doc)."""
 
     def __init__(self, model: Model):
-        pairs = matched_pairs(model)  # (the model refuses what pairs are not solved with: plasticity, ...)
+        m = all_pairs(model)  # (the model refuses what pairs are not solved with: plasticity, ...)
         dim = model.dim
-        join = lambda name: np.concatenate([getattr(p, name) for p in pairs])  # noqa: E731
-        nodes, others, self.normals, self.g0 = join("nodes"), join("others"), join("normals"), join("g0")
-        self.friction = np.concatenate([np.full(p.nodes.size, p.friction) for p in pairs])
+        nodes, others, self.normals, self.g0, self.friction = m.nodes, m.others, m.normals, m.g0, m.friction
         where = np.full(model.basis.N, -1)
         where[model.free] = np.arange(model.free.size)
         mass = model.M.diagonal()  # lumped: one per dof, alike for a node's components
@@ -211,7 +209,7 @@ class _Pairs:
         self.w_sum = np.where(self.w_sum > 0, self.w_sum, np.inf)  # both held: never corrected
         self.tangents = tangent_bases(self.normals) if np.any(self.friction > 0) else None
         self.n_nodes = int(nodes.size)
-        self.n_pairs = len(pairs)
+        self.n_pairs = len(model.case.contacts)
 
     def _at(self, u: np.ndarray, side: int) -> np.ndarray:
         cols = self.cols[side]

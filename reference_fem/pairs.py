@@ -53,7 +53,7 @@ class Matched:
     others : (n,) the node of ``other`` across each
     normals : (n, dim) the face's outward unit normal at each node (mesh frame)
     g0 : (n,) initial gaps ``n . (x_other - x_node)`` (m; negative: an overlap)
-    friction : the pair's Coulomb coefficient
+    friction : the pair's Coulomb coefficient (of all pairs, :func:`all_pairs`: one per node)
     area : the face's area (m^2, per radian when axisymmetric)
     """
 
@@ -61,7 +61,7 @@ class Matched:
     others: np.ndarray
     normals: np.ndarray
     g0: np.ndarray
-    friction: float
+    friction: float | np.ndarray
     area: float
 
 
@@ -99,21 +99,23 @@ def match(model, pair) -> Matched:
     return Matched(face.nodes, other[best], normals, along, float(pair.friction), face.area)
 
 
-def matched_pairs(model) -> list[Matched]:
-    """:func:`match` of every contact pair of ``model.case``."""
-    return [match(model, pair) for pair in model.case.contacts]
+def all_pairs(model) -> Matched:
+    """Every contact pair of ``model.case`` matched (:func:`match`), as one: their node pairs one
+    after another, ``friction`` one per node (n,), ``area`` the faces' sum."""
+    pairs = [match(model, pair) for pair in model.case.contacts]
+    join = lambda name: np.concatenate([getattr(m, name) for m in pairs])  # noqa: E731
+    return Matched(join("nodes"), join("others"), join("normals"), join("g0"),
+                   np.concatenate([np.full(m.nodes.size, m.friction) for m in pairs]), sum(m.area for m in pairs))
 
 
 def case_pair_rows(model) -> WallRows:
     """The constraint rows of all of ``model.case``'s contact pairs (module docstring): their
     normal rows, then (where any pair has friction) their tangential rows, node by node."""
-    pairs = matched_pairs(model)
+    m = all_pairs(model)
     size = np.abs(model.rmesh.mesh.p).max()
-    join = lambda name: np.concatenate([getattr(m, name) for m in pairs])  # noqa: E731
-    friction = np.concatenate([np.full(m.nodes.size, m.friction) for m in pairs])
     try:
-        return wall_rows(join("nodes"), join("normals"), join("g0"), model.free, model.basis.N, friction,
-                         PENETRATION_TOL * size, others=join("others"))
+        return wall_rows(m.nodes, m.normals, m.g0, model.free, model.basis.N, m.friction, PENETRATION_TOL * size,
+                         others=m.others)
     except ValueError:
         raise UnsupportedCase("reference solver: no node of a contact pair's faces can move along their normal "
                               "(both supported)") from None

@@ -40,8 +40,8 @@ def contact_static_probes(case, options: SolverOptions | None = None) -> dict:
     zero = np.zeros(model.n_dof)
     system.initial_acceleration(zero)
     u, _ = system.solve(zero, zero, 1, long.dt)
-    state = State(1, u, zero, zero)
-    return dict(zip(CaseProbes(long, model, system).names, CaseProbes(long, model, system).values(state, system)))
+    probes = CaseProbes(long, model, system)
+    return dict(zip(probes.names, probes.values(State(1, u, zero, zero), system)))
 
 
 def explicit_limit(case) -> tuple[float, list[float]]:

@@ -86,7 +86,7 @@ from .layer_law import (
 )
 from .linalg import factorize_spd
 from .layer_descent import descend
-from .loads import segment_shape_functions
+from .loads import region_nodes, segment_shape_functions
 from .model import ModelError
 from .newmark import Constants, Load, State
 from .options import SolverOptions
@@ -263,7 +263,7 @@ class ContactLayer:
         #: the side (the wall, or a pair: :func:`layer_sides`) of every point
         self.side = np.concatenate([np.full(len(p.element), k) for k, (p, _, _) in enumerate(sides)])
         self.side_edges = [(spec.edge,) + ((spec.other,) if spec.other else ()) for spec in specs]
-        counts = np.cumsum([0] + [len(model.mesh.edge_segments(spec.edge)[0]) for spec in specs])
+        counts = np.cumsum([0] + [int(p.element[-1]) + 1 for p, _, _ in sides])  # each side's face segments
         self.n_elements = int(counts[-1])
         self.element = np.concatenate([p.element + c for (p, _, _), c in zip(sides, counts)])
         self.B = np.concatenate([p.B for p, _, _ in sides], axis=1)
@@ -500,13 +500,12 @@ class ContactSystem:
         amplitudes, of the whole section or of one region (a body): only harmonic 0 carries a
         mean."""
         row = np.zeros(self.model.n_dof)
-        mesh = self.model.mesh
+        nodes = region_nodes(self.model.mesh, region)
         for i, (s, m_full) in enumerate(zip(self.model.systems, self.m_full)):
             if s.mode == Mode(0, "c"):
-                axial = np.zeros_like(m_full)
-                nodes = (np.arange(mesh.n_nodes) if region is None
-                         else np.unique(mesh.elements[mesh.regions[region]]))
-                axial[3 * nodes + 1] = m_full[3 * nodes + 1]  # x2 = z is the axis of the rod
+                axial = np.zeros((len(m_full) // 3, 3))
+                axial[nodes, 1] = m_full.reshape(-1, 3)[nodes, 1]  # x2 = z is the axis of the rod
+                axial = axial.ravel()
                 row[self.offsets[i]:self.offsets[i + 1]] = (s.T.T @ axial) / axial.sum()
         return row
 

@@ -51,9 +51,10 @@ MAX_ITERATIONS = 500
 TOLERANCE = 1e-10
 
 
-def tresca(layer, strain: np.ndarray, limits: np.ndarray):
-    """Stress (n_points, n_x3, 6), tangent (.., 6, 6) and energy density (n_points, n_x3) of
-    every layer point at ``strain`` with the friction limits ``limits`` held.
+def tresca(layer, strain: np.ndarray, limits: np.ndarray, tangent: bool = True):
+    """Stress (n_points, n_x3, 6), tangent (.., 6, 6; None unless ``tangent``: a line search's
+    trial needs none) and energy density (n_points, n_x3) of every layer point at ``strain``
+    with the friction limits ``limits`` held.
 
     Tresca's friction acts where its limit is set, whether the point is closed at ``strain`` or
     not (at the settled step a point's limit is its own ``f |sigma_n|``, zero where open): tied
@@ -77,6 +78,8 @@ def tresca(layer, strain: np.ndarray, limits: np.ndarray):
     sigma[..., SHEAR] = np.where(rubbing[..., None], kappa[..., None] * trial, 0.0)
     energy = np.where(closed, 0.5 * E * closure**2, 0.0) + np.where(
         slipping, (limits * size - 0.5 * limits**2) / G, np.where(rubbing, 0.5 * size**2 / G, 0.0))
+    if not tangent:
+        return sigma, None, energy
     near = closure < -CLOSURE_TOL + EDGE_BAND
     sticking = rubbing & ~(slipping & (size > limits + G * EDGE_BAND))
     D = np.zeros(strain.shape + (6,))
@@ -104,12 +107,12 @@ def descend(system, y: np.ndarray, start: np.ndarray, step_index: int, t: float)
     a = U.T @ layer.face_values(start).ravel()
     limits = friction_limits(layer, layer.face_strain((U @ a).reshape(shape)))
 
-    def energy(v):
-        sigma, D, psi = tresca(layer, layer.face_strain((U @ v).reshape(shape)), limits)
+    def energy(v, tangent=False):
+        sigma, D, psi = tresca(layer, layer.face_strain((U @ v).reshape(shape)), limits, tangent)
         return 0.5 * (v - target) @ (stiffness * (v - target)) + float(np.sum(layer.area * psi)), sigma, D
 
     for iteration in range(1, MAX_ITERATIONS + 1):
-        pi, sigma, D = energy(a)
+        pi, sigma, D = energy(a, tangent=True)
         gradient = stiffness * (a - target) + U.T @ layer.face_force(sigma).ravel()
         step = -np.linalg.solve(np.diag(stiffness) + U.T @ layer.face_matrix(None, D) @ U, gradient)
         slope = float(gradient @ step)
@@ -138,6 +141,6 @@ def descend(system, y: np.ndarray, start: np.ndarray, step_index: int, t: float)
         raise ContactError(f"step {step_index} (t = {t:.6g} s): contact states did not settle in {MAX_ITERATIONS} "
                            "iterations of the line-search Newton method either (state chattering)")
     w = U @ a
-    sigma = tresca(layer, layer.face_strain(w.reshape(shape)), limits)[0]
+    sigma = tresca(layer, layer.face_strain(w.reshape(shape)), limits, tangent=False)[0]
     f = layer.face_force(sigma)
     return y - np.concatenate([Z @ fi for Z, fi in zip(system.Z, f)]), iteration
