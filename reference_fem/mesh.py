@@ -230,9 +230,18 @@ def theta_step(case) -> float:
 def _mesh_section(case, rep: str) -> RefMesh:
     """A mesh section's reference mesh (:mod:`reference_fem.swept`): its 9-node elements, or
     swept into 27-node hexahedra over ``N_THETA * refine`` intervals (or ``theta_elements``) round a ring, or along a
-    prism in elements as long as the section's median one; x3 break points are nodes."""
+    prism in elements as long as the section's median one, or (a ring in plane strain) its lowest row swept into
+    an annulus over as many intervals; x3 break points are nodes."""
     section = swept.section_elements(case)
     swept.check_sweepable(case, rep, section)
+    if rep == PLANE_STRAIN:  # a ring's annulus: the lowest row of the section swept round the axis
+        row = swept.plane_strain_row(case, section)
+        theta = _span_nodes(0.0, 2 * np.pi, _breaks(case, rep)[2], theta_step(case))
+        x = swept.annulus_nodes(section, row, theta)
+        parent = np.tile(row, len(theta) - 1)
+        mesh = mesh_from_points(x, groups=swept.pieces(section)[parent])
+        counts = {"section": len(row), "theta": len(theta) - 1, "elements": mesh.nelements}
+        return RefMesh(mesh, rep, counts, section, parent)
     x3 = None
     if rep == SOLID:
         extra = _breaks(case, rep)[2]

@@ -69,7 +69,7 @@ class Model:
             self.B = forms.bbar_operator(self.B, self.weights, self.x_qp, self.basis.dx.shape[1])
         self.lam, self.mu = case.material.lame
         #: each element's index into ``case.materials`` (0 everywhere without regions)
-        self.material_index = regions.mesh_material_index(case, self.rep, mesh)
+        self.material_index = regions.mesh_material_index(case, self.rep, mesh, self.rmesh.section, self.rmesh.parent)
         # the reference's implementation of the material's law (an unknown one is refused here) and
         # the density: with regions each material's at its own elements (their quadrature points)
         if case.regions:

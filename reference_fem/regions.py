@@ -48,11 +48,15 @@ def element_index(case, s: np.ndarray, t: np.ndarray) -> np.ndarray:
     return case.material_index(st=np.column_stack(st))
 
 
-def mesh_material_index(case, rep: str, mesh) -> np.ndarray:
+def mesh_material_index(case, rep: str, mesh, section=None, parent: np.ndarray | None = None) -> np.ndarray:
     """Index into ``case.materials`` of every element of a reference ``mesh`` in
-    representation ``rep``, ``(n_elements,)`` (zeros without regions)."""
+    representation ``rep``, ``(n_elements,)`` (zeros without regions); ``section``, ``parent``:
+    a mesh section's quadratic mesh at the case's refinement and the element of it each element
+    was made from, whose region it is in."""
     if not case.regions:
         return np.zeros(mesh.nelements, int)
+    if parent is not None:
+        return case.material_index(st=section.x[section.elements[:, 8]], region_elements=section.regions)[parent]
     return element_index(case, *section_of(case, rep, element_centres(mesh)))
 
 

@@ -1,6 +1,8 @@
 """Reference meshes of a mesh section (:class:`cases.msh_section.MeshSection`): its 9-node
 quadrilaterals as they are (the axisymmetric 2D model and the harmonic model), or swept round
-the axis (a ring) or along the length (a prism) into 27-node hexahedra (3D).
+the axis (a ring) or along the length (a prism) into 27-node hexahedra (3D), or, a ring's plane
+strain (a section the same at every z: a stack of rectangles), its lowest row swept round the
+axis into the 9-node quadrilaterals of an annulus (2D).
 
 Every node of a hexahedron is the image of its reference position under the section element's
 own 9-node map times the sweep, so curved section edges stay curved. ``refine = k`` splits each
@@ -21,14 +23,14 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
-from skfem import ElementHex2
+from skfem import ElementHex2, ElementQuad2
 
 from cases.geometry import RING
 from cases.msh_section import shape
 from cases.params import UnsupportedCase
 from cases.section_mesh import section_mesh
 
-from .frames import AXISYMMETRIC, SOLID, to_cartesian
+from .frames import AXISYMMETRIC, PLANE_STRAIN, SOLID, to_cartesian
 
 
 def section_elements(case):
@@ -42,11 +44,55 @@ def check_sweepable(case, rep: str, section) -> None:
     if rep == AXISYMMETRIC:
         return
     if rep != SOLID:
-        raise UnsupportedCase(f"reference solver: {case.name}: a mesh section has no plane-strain 2D form; use dim=3")
+        plane_strain_row(case, section)
+        return
     if case.body == RING and np.abs(section.x[:, 0]).min() <= 1e-9 * np.abs(section.x).max():
         raise UnsupportedCase(f"reference solver: {case.name}: a mesh section that touches the axis has no 3D form "
                               "(its swept elements would collapse on the axis); use dim=2 where the case is "
                               "axisymmetric")
+
+
+def plane_strain_row(case, section) -> np.ndarray:
+    """The section elements of a ring's plane-strain form: those on the section's lowest x2
+    (each, swept round the axis, is an annulus sector); refused in one line unless every
+    element is a rectangle aligned with the axes whose nodes stand in three rows of x1 and
+    three of x2 (so that the section is the same at every x2: what plane strain assumes), and
+    those on the lowest x2 span the section's x1 once."""
+    if case.body != RING:
+        raise UnsupportedCase(f"reference solver: {case.name}: a prism's mesh section has no plane-strain 2D form; "
+                              "use dim=3")
+    X = section.x[section.elements]  # (n_el, 9, 2)
+    scale = np.abs(section.x).max()
+    key = np.round(X / (1e-9 * scale)).astype(np.int64)
+    rows = [np.unique(key[e, :, c]).size for e in range(len(key)) for c in (0, 1)]
+    bottom = np.flatnonzero(np.abs(X[:, :, 1].min(axis=1) - section.x[:, 1].min()) <= 1e-9 * scale)
+    r_span = sorted((X[e, :, 0].min(), X[e, :, 0].max()) for e in bottom)
+    covered = np.sum([b - a for a, b in r_span])
+    # the x1 spans of the lowest row's elements, and of all elements at any one height, agree
+    same = all(np.isclose(covered, np.sum(X[col, :, 0].max(axis=1) - X[col, :, 0].min(axis=1)), rtol=1e-9)
+               for col in [np.flatnonzero(np.abs(X[:, :, 1].min(axis=1) - z) <= 1e-9 * scale)
+                           for z in np.unique(X[:, :, 1].min(axis=1))])
+    if any(n != 3 for n in rows) or not same:
+        raise UnsupportedCase(f"reference solver: {case.name}: a mesh section has a plane-strain 2D form only where "
+                              "it is a stack of rectangles aligned with r and z, the same at every z; use dim=3")
+    return bottom
+
+
+def annulus_nodes(section, row: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """Node coordinates ``(2, n_elements, 9)`` (scikit-fem's ``ElementQuad2`` order) of the
+    plane-strain ring: each section element of ``row`` (:func:`plane_strain_row`) over its x1
+    (its three node rows: quadratic in x1 as the section element is) times each interval of the
+    ``theta`` nodes; elements ordered theta interval by theta interval."""
+    x1 = section.x[section.elements[row], 0]  # (n_row, 9): three nodes at each of its three radii
+    r = np.column_stack([x1.min(axis=1), np.median(x1, axis=1), x1.max(axis=1)])
+    ref = ElementQuad2.doflocs  # (9, 2) in [0, 1]^2: (along x1, round the axis)
+    xi = ref[:, 0]
+    lagrange = np.column_stack([2 * (xi - 0.5) * (xi - 1), -4 * xi * (xi - 1), 2 * xi * (xi - 0.5)])  # (9, 3)
+    radius = r @ lagrange.T  # (n_row, 9)
+    angle = theta[:-1, None] + np.diff(theta)[:, None] * ref[None, :, 1]  # (n_theta, 9)
+    R = np.broadcast_to(radius[None], (len(angle),) + radius.shape)
+    A = np.broadcast_to(angle[:, None, :], R.shape)
+    return np.array([R * np.cos(A), R * np.sin(A)]).reshape(2, -1, 9)
 
 
 def median_size(section) -> float:
@@ -97,6 +143,8 @@ def edge_facets(case, rep: str, mesh, section, facets: np.ndarray, edge: str,
     (a face of another body at the same points is not on the edge)."""
     seg, owner = section.edge_segments(edge)
     scale = 1e-7 * np.abs(section.x).max()
+    if rep == PLANE_STRAIN:
+        return _annulus_edge_facets(mesh, section, facets, edge, parent, seg, owner, scale)
     key = lambda p: [tuple(k) for k in np.round(np.asarray(p) / scale).astype(np.int64)]  # noqa: E731
     ends = {frozenset(pair): o for pair, o in zip(zip(key(section.x[seg[:, 0]]), key(section.x[seg[:, -1]])),
                                                  np.asarray(owner).tolist())}
@@ -110,6 +158,24 @@ def edge_facets(case, rep: str, mesh, section, facets: np.ndarray, edge: str,
         element = mesh.f2t[0, facets]  # a boundary facet's one element
         on = [hit and ends[frozenset(points[i * n:(i + 1) * n])] == parent[element[i]] for i, hit in enumerate(on)]
     found = facets[np.array(on, bool)]
+    if found.size == 0:
+        raise ValueError(f"reference solver: edge {edge!r} has no boundary facets")
+    return found
+
+
+def _annulus_edge_facets(mesh, section, facets, edge, parent, seg, owner, scale) -> np.ndarray:
+    """:func:`edge_facets` of a ring's plane-strain annulus: a facet round the axis at radius r
+    of an element made from section element e lies on the edge where one of the edge's segments
+    runs along x2 at x1 = r and belongs to e (the annulus has no facets of the edges along x1:
+    they are its plane)."""
+    along = np.abs(section.x[seg[:, 0], 0] - section.x[seg[:, -1], 0]) <= scale
+    wanted = {(int(o), int(k)) for o, k in zip(np.asarray(owner)[along],
+                                               np.round(section.x[seg[along, 0], 0] / scale).astype(np.int64))}
+    corners = mesh.p[:, mesh.facets[:, facets]]  # (2, n_vertices, n_facets)
+    r = np.round(np.hypot(corners[0], corners[1]) / scale).astype(np.int64)
+    element = parent[mesh.f2t[0, facets]]
+    on = (r[0] == r[-1]) & np.array([(int(e), int(k)) in wanted for e, k in zip(element, r[0])], bool)
+    found = facets[on]
     if found.size == 0:
         raise ValueError(f"reference solver: edge {edge!r} has no boundary facets")
     return found
