@@ -37,7 +37,7 @@ SHARED_SOURCES = ("cases", "runs")
 #: modules of those packages that decide nothing in a run's files (they draw, report, or read
 #: finished runs: the error estimate and the --tol search): editing them must not send a report
 #: back to rerunning every solve
-PRESENTATION = {"runs/figures.py", "runs/progress.py", "runs/estimate.py", "runs/tolerance.py"}
+PRESENTATION = {"runs/figures.py", "runs/progress.py", "runs/estimate.py", "runs/tolerance.py", "runs/errors.py"}
 
 
 @functools.cache

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from runs.errors import common_grid, history_errors, moving_average, smoothed  # noqa: F401 - used here and re-exported
+from runs.errors import common_grid, history_errors, inside_window, moving_average, smoothed  # noqa: F401 - used here and re-exported
 
 
 def extrema_near(t: np.ndarray, a: np.ndarray, points, kinds) -> list[tuple[float, float]]:
