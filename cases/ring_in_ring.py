@@ -11,6 +11,19 @@ Pa reached at 15 ms and back to 0 at 30 ms (linearly), friction 0.3, dt = 1e-4 s
 3e-2 s, the meshes (8 and 12 elements through the walls, one along the axis: plane strain, u_z
 = 0 everywhere as the thick cylinder), 20 harmonics.
 
+The probes: the displacements of the inner ring's face under a patch (A_ur) and at 45 deg (B_ut),
+of its bore at 90 deg (C_ur) and of the outer ring's outside at 0 deg (outer_ur); the outer
+ring's hoop stress on its outside at 0 deg (outer_stt), where it bends most (in the wall's
+middle, near its neutral line, the hoop stress holds little but the ringing: it did not
+converge in dt); the mean normal stress on the inner ring's face all round (contact_p).
+Compared through a window of 1 ms (``references['comparison_window_s']``). (The inner ring's
+hoop stress on its bore at 90 deg was tried too: the reference's point stress, its nearest
+quadrature point's, converges there at first order, and meshes r1-r2-r4 left it 1.2 % uncertain.)
+
+The reference FEM runs it in plane strain (``dim = 2``: each body's section swept round the
+axis into an annulus) or in 3D (``dim = 3``: one 27-node element along the axis, u_z = 0: the
+same histories to round-off, measured, at 15 times the cost).
+
 Why these: under the patches the inner ring ovalizes (harmonic 2 carries most of its motion),
 reaches the outer ring under the patches at about 3 ms and presses it out over two arcs that
 grow with the load and shrink as it falls, the sides at theta = pi / 2 moving in and staying
@@ -41,12 +54,16 @@ PATCHES = ((-math.pi / 4, math.pi / 4), (3 * math.pi / 4, 5 * math.pi / 4))
 #: the load rises to q over 15 ms and falls back over 15 ms: the rings meet without a blow (whose
 #: ringing no two models resolve alike) and part again
 RAMP = Amplitude(((0.0, 0.0), (1.5e-2, 1.0), (3e-2, 0.0)))
+#: the comparison window (s): a sixth of the rings' lowest period (about 6 ms); it keeps their
+#: bending and leaves out the ringing each closure of the clearance sets off (waves through the
+#: walls, periods under 0.2 ms), which converges in dt only slowly (measured: docs/scenes.md)
+COMPARISON_WINDOW = 1e-3
 #: the outer ring's bronze: Young's modulus, Poisson's ratio, density
 BRONZE = dict(E=1.1e11, nu=0.34, rho=8.8e3)
 
 DEFAULTS = dict(
     dt=1e-4, t_end=3e-2, refine=1, harmonics=20, E=2.1e11, nu=0.3, rho=7.8e3, tau_s=1.7e8, plastic=False,
-    tol=1e-5, dim=3, q=2e6, friction=0.3, layer_thickness=1e-4, layer_stiffness=1.0,
+    tol=1e-5, dim=2, q=2e6, friction=0.3, layer_thickness=1e-4, layer_stiffness=1.0,
 )
 SPECS = dict(
     COMMON,
@@ -76,7 +93,7 @@ def build(p: dict) -> Case:
         Probe("B_ut", "point", "u", (3,), point=(R_FACE, mid, math.pi / 4)),
         Probe("C_ur", "point", "u", (1,), point=(R_BORE, mid, math.pi / 2)),
         Probe("outer_ur", "point", "u", (1,), point=(R_OUT, mid, 0.0)),
-        Probe("outer_stt", "point", "sigma", (3, 3), point=(0.5 * (R_OUTER_BORE + R_OUT), mid, 0.0)),
+        Probe("outer_stt", "point", "sigma", (3, 3), point=(R_OUT, mid, 0.0)),
         Probe("contact_p", "edge_mean", "sigma", ("n", "n"), edge="inner.face"),
     )
     bronze = Material(BRONZE["E"], BRONZE["nu"], BRONZE["rho"], p["tau_s"], plastic=p["plastic"])
@@ -86,5 +103,5 @@ def build(p: dict) -> Case:
         regions=(Region("outer", bronze),),
         loads=(Pressure(p["q"], "inner.bore", PATCHES, amplitude=RAMP),), supports=(Support("all", (2,)),), probes=probes,
         params=p, contacts=(ContactPair("inner.face", "outer.bore", p["friction"]),),
-        provenance=PROVENANCE,
+        provenance=PROVENANCE, references={"comparison_window_s": COMPARISON_WINDOW},
     )

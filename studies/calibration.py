@@ -54,6 +54,10 @@ def second_plan(name: str, main: TruthPlan) -> TruthPlan:
     if main.method == EXPLICIT_TRUTH and get_case(name).wall is not None:
         # the rod: implicit Newmark with exact (Lagrange multiplier) contact on a massless face
         return TruthPlan(TIME_TRUTH, refine=(4, 8), dt_divisors=(1, 2, 4, 8), solver=REF2D)
+    if main.method == TIME_TRUTH:
+        # ring_in_ring: central differences with impulse contact against implicit Newmark with
+        # Lagrange multipliers, meshes r1-r2-r4 (an r8 would be hours in 2D)
+        return TruthPlan(EXPLICIT_TRUTH, solver=EXPLICIT, refine=(1, 2, 4), output_divisor=main.output_divisor)
     if main.method == EXPLICIT_TRUTH:  # plastic scenes: the other element (B-bar or standard), same meshes
         options = dict(main.options)
         options["bbar"] = not options.get("bbar", False)

@@ -52,7 +52,7 @@ from runs.registry import lookup
 
 from .cache import Run
 from .jobs import OK, Job
-from .metrics import common_grid, smoothed
+from .metrics import common_grid, inside_window, smoothed
 from .plan import (EXPLICIT, EXPLICIT_TRUTH, MODAL, MODAL_TRUTH, REF2D, REF3D, TIME_TRUTH, TruthPlan, explicit_truth,
                    full, quick)
 
@@ -213,16 +213,19 @@ def jobs(name: str, plan: TruthPlan, base: dict) -> dict[tuple, Job]:
     coarse = plan.refine[0]
     for d in plan.dt_divisors:
         out["dt", d] = Job.make(name, plan.solver, {**base, "refine": coarse, **({"dt": dt / d} if d != 1 else {})})
+    d = plan.space_dt_divisor
     for r in plan.refine[1:]:
-        out["space", r] = Job.make(name, plan.solver, {**base, "refine": r})
+        out["space", r] = Job.make(name, plan.solver, {**base, "refine": r, **({"dt": dt / d} if d != 1 else {})})
     return out
 
 
 # -- sequences of levels --------------------------------------------------------------------
 def _rel(d: np.ndarray, scale: np.ndarray, grid: np.ndarray, window: float) -> float:
-    """``max |d| / max |scale|``, both seen through the comparison window."""
-    top = np.abs(smoothed(scale, grid, window)).max()
-    return float(np.abs(smoothed(d, grid, window)).max() / top) if top else math.nan
+    """``max |d| / max |scale|``, both seen through the comparison window where it fits whole
+    (as :func:`runs.errors.history_errors` measures)."""
+    keep = inside_window(grid, window)
+    top = np.abs(smoothed(scale, grid, window)[keep]).max()
+    return float(np.abs(smoothed(d, grid, window)[keep]).max() / top) if top else math.nan
 
 
 def _on(run: Run, probe: str, grid: np.ndarray) -> np.ndarray:
@@ -334,12 +337,13 @@ def _modal(case, plan, runs, window):
 def _time_halving(case, plan, runs, window):
     coarse, fine = plan.refine[0], plan.refine[-1]
     ladder = [runs["dt", d] for d in plan.dt_divisors]
-    meshes = [ladder[0]] + [runs["space", r] for r in plan.refine[1:]]  # at the case's dt, coarse to fine
+    # at dt / space_dt_divisor, coarse to fine
+    meshes = [runs["dt", plan.space_dt_divisor]] + [runs["space", r] for r in plan.refine[1:]]
     if any(b != 2 * a for a, b in zip(plan.dt_divisors, plan.dt_divisors[1:])):
         raise ValueError("the dt ladder must halve the time step at every level")
     end = min(r.history["t"].iloc[-1] for r in runs.values())
     qa, qb, qc = ladder[-3:]
-    grid_a, grid_b, grid_0 = _times(qa, end), _times(qb, end), _times(ladder[0], end)
+    grid_a, grid_b, grid_0 = _times(qa, end), _times(qb, end), _times(meshes[0], end)
     values, parts = {}, {}
     for probe in case.probe_names:
         a_, b_, c_ = (_on(r, probe, grid_a) for r in (qa, qb, qc))
@@ -357,8 +361,8 @@ def _time_halving(case, plan, runs, window):
             d_fine = _rel(c - b, c, grid_b, window)
             u_t = GCI_SAFETY * d_fine / (2 ** min(p, NEWMARK_ORDER) - 1) if math.isfinite(p) and p > 0 else d_fine
             how = "finest"
-        # the finest mesh at the case's dt: its difference corrects the ladder's mesh
-        delta = _on(meshes[-1], probe, grid_0) - _on(ladder[0], probe, grid_0)
+        # the finest mesh (at the meshes' dt): its difference corrects the ladder's mesh
+        delta = _on(meshes[-1], probe, grid_0) - _on(meshes[0], probe, grid_0)
         T = T + np.interp(grid_b, grid_0, delta)
         u_s, p_s = _ladder(meshes, [1 / r for r in plan.refine], probe, grid_0, window,
                            scale=np.interp(grid_0, grid_b, T))
@@ -366,7 +370,8 @@ def _time_halving(case, plan, runs, window):
         parts[probe] = {"time": u_t, "order_time": p, "time_estimate": how, "space": u_s, "order_space": p_s}
     p_ = ladder[0].summary["params"]
     label = (f"{plan.solver} r{coarse} at dt/{', dt/'.join(map(str, plan.dt_divisors))} (dt = {p_['dt']:g} s), "
-             f"Richardson where the order is near 2, corrected to r{fine} at dt"
+             f"Richardson where the order is near 2, corrected to r{fine} at "
+             + ("dt" if plan.space_dt_divisor == 1 else f"dt/{plan.space_dt_divisor}")
              + (f" (meshes r{', r'.join(map(str, plan.refine))})" if len(plan.refine) > 2 else ""))
     return grid_b, values, parts, label
 

@@ -334,6 +334,25 @@ def test_time_step_halving_extrapolates_only_near_newmarks_order(order):
     assert part["space"] == pytest.approx(5e-4 / scale, rel=1e-3)  # the difference of the two meshes
 
 
+def test_time_step_halving_meshes_at_a_finer_dt():
+    """``space_dt_divisor``: the finer meshes run at dt / 4 and correct the ladder by their
+    difference from its dt / 4 level, not from its dt level; with an error that is one part in
+    time and one in space, the truth is the finest mesh's (its offset 1e-3 / 3 stays)."""
+    plan = TruthPlan(TIME_TRUTH, refine=(1, 2, 3), dt_divisors=(1, 2, 4, 8), space_dt_divisor=4)
+    base = {"plastic": True}
+    dt0 = get_case("thick_cylinder").dt
+    job = jobs("thick_cylinder", plan, base)
+    assert {k: j.build().params["dt"] / dt0 for k, j in job.items() if k[0] == "space"} == {
+        ("space", 2): pytest.approx(0.25), ("space", 3): pytest.approx(0.25)}
+    exact = lambda t: np.sin(2000 * t)  # noqa: E731
+    runs = _synthetic_runs("thick_cylinder", plan, base,
+                           lambda t, dt, r: exact(t) + 0.05 * (dt / dt0) ** 2 * np.cos(3000 * t) + 1e-3 / r)
+    truth = assemble("thick_cylinder", plan, base, runs)
+    assert np.abs(truth.values["A_ur"] - exact(truth.t) - 1e-3 / 3).max() < 1e-12
+    with pytest.raises(ValueError, match="meshes run at one of its dt levels"):
+        TruthPlan(TIME_TRUTH, refine=(1, 2), dt_divisors=(1, 2, 4), space_dt_divisor=8)
+
+
 @pytest.mark.slow
 def test_plastic_thick_cylinder_truth_uncertainty_covers_a_much_finer_run(tmp_path):
     """The plastic thick cylinder (half the window): the time ladder dt, dt/2, dt/4 on the
@@ -395,11 +414,14 @@ def test_explicit_plans_and_their_second_paths():
 
 # -- stored truths ---------------------------------------------------------------------------------
 SCENES = ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact", "layered_cylinder", "flywheel",
-          "layered_cylinder_pulse", "moving_load", "moving_load_notched")
-#: stored truths of scenes still in progress (issue 39): their key and calibration are checked,
-#: not yet their sharpness or front (rod_collision's target_mid_szz does not converge over the
-#: explicit ladder; no report has measured its front)
-IN_PROGRESS = ("rod_collision",)
+          "layered_cylinder_pulse", "moving_load", "moving_load_notched", "rod_collision")
+#: stored truths whose second path disagrees with them beyond both uncertainties (issue 39):
+#: ring_in_ring's implicit reference (Lagrange multipliers, stick and slip by active set) and its
+#: explicit engine (impulses within Coulomb's limit) both converge, in dt and in the mesh, but
+#: 0.44 % apart on the displacements with friction 0.3 (0.18-0.22 % at r1 without friction):
+#: which engine's friction is right is not yet known. Their key and sharpness are checked, and
+#: the calibration as it stands (recorded, recomputed, and not covered where it is not)
+UNCALIBRATED = ("ring_in_ring",)
 
 
 def _stored(name):
@@ -421,7 +443,7 @@ def test_a_truths_key_follows_the_case_and_the_method():
     assert key_of(replace(case, title="another title"), plan) == key_of(case, plan)
 
 
-@pytest.mark.parametrize("name", SCENES + IN_PROGRESS)
+@pytest.mark.parametrize("name", SCENES + UNCALIBRATED)
 def test_stored_truth_key_matches_its_case(name):
     """A stored truth stands only for the case and method it was made for: when a scene or the
     truth method changes, this fails until ``smfem truth NAME --full`` is run again."""
@@ -434,7 +456,7 @@ def test_stored_truth_key_matches_its_case(name):
         f"truths/{name} no longer matches its case: run 'smfem truth {name} --full'")
 
 
-@pytest.mark.parametrize("name", SCENES)
+@pytest.mark.parametrize("name", SCENES + UNCALIBRATED)
 def test_stored_front_was_measured_against_the_stored_truth(name):
     """``smfem run --tol`` starts from a scene's stored front only while it was measured against
     the stored truth: when the truth is made again, this fails until ``smfem report
@@ -450,10 +472,11 @@ def test_stored_front_was_measured_against_the_stored_truth(name):
     assert expected <= set(front.solver) and (front.total > 0).all() and (front.cpu_s > 0).all()
 
 
-@pytest.mark.parametrize("name", SCENES)
+@pytest.mark.parametrize("name", SCENES + UNCALIBRATED)
 def test_stored_truth_is_sharp_enough_to_judge_its_scene(name):
-    """0.3 % on every displacement and velocity probe, 1 % on the rod's stresses through its
-    window; probes on singular points say why they have no truth."""
+    """0.3 % on every displacement and velocity probe, 1 % on the stresses (through the
+    comparison window where the scene has one); probes on singular points say why they have no
+    truth."""
     truth = _stored(name)
     case = get_case(name)
     singular = case.references.get("singular_probes", {})
@@ -467,7 +490,7 @@ def test_stored_truth_is_sharp_enough_to_judge_its_scene(name):
             assert u <= 1e-2, (probe.name, u)
 
 
-@pytest.mark.parametrize("name", SCENES + IN_PROGRESS)
+@pytest.mark.parametrize("name", SCENES)
 def test_calibration_of_the_stored_truth(name):
     """The distance to the second path, recomputed from the two stored histories, is the one
     recorded; every probe's uncertainty covers it (with the second path's) and is at most three
@@ -484,6 +507,24 @@ def test_calibration_of_the_stored_truth(name):
         assert d == pytest.approx(c["distance"], rel=1e-6, abs=1e-12)
         assert d <= truth.uncertainty[probe] + second.uncertainty[probe], (probe, c)
         assert truth.uncertainty[probe] <= SHARPNESS * max(d, FLOOR), (probe, c)
+
+
+@pytest.mark.parametrize("name", UNCALIBRATED)
+def test_a_truth_its_second_path_disagrees_with_says_so(name):
+    """The recorded distances are the stored histories' (recomputed), and the calibration says
+    where the uncertainties do not cover them: the displacements of ring_in_ring, 0.22-0.45 %
+    from the explicit path, against 0.06-0.11 % stated (UNCALIBRATED says why)."""
+    from runs.errors import history_errors
+    from studies import stored
+
+    truth, second = _stored(name), stored.read(stored.directory(name) / "second")
+    window = get_case(name).references.get("comparison_window_s", 0.0)
+    for probe, c in truth.calibration["probes"].items():
+        d = history_errors(second.t, second.values[probe], truth.t, truth.values[probe], window)[0]
+        assert d == pytest.approx(c["distance"], rel=1e-6, abs=1e-12)
+        assert c["covered"] == (d <= truth.uncertainty[probe] + second.uncertainty[probe])
+    moved = [p.name for p in get_case(name).probes if p.field == "u"]
+    assert not any(truth.calibration["probes"][p]["covered"] for p in moved)
 
 
 @pytest.mark.slow
