@@ -179,9 +179,9 @@ def quick() -> tuple[CaseStudy, ...]:
     """The default report: every solver over meshes up to a few times the paper's and at
     least three time steps (the case's, half and a quarter of it, more where cheap; twice it
     where a quarter is dear and adds little), so that the whole study runs within 10 minutes on
-    two cores (the scenes' truths are stored: ``truths/``). The report: 7 min 27 s on two cores
-    (2026-11-26, seven scenes, 292 runs, the error estimates' companions included), 445 s of
-    them the study."""
+    two cores (the scenes' truths are stored: ``truths/``). The report: 9 min 54 s on two cores
+    with the install in a fresh clone (2026-11-26, eleven scenes, 399 runs, the error estimates'
+    companions included)."""
     return _estimated(*_quick_studies(), unestimated=("flywheel", "ring_in_ring"))
 
 

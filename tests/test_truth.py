@@ -416,11 +416,11 @@ def test_explicit_plans_and_their_second_paths():
 SCENES = ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact", "layered_cylinder", "flywheel",
           "layered_cylinder_pulse", "moving_load", "moving_load_notched", "rod_collision")
 #: stored truths whose second path disagrees with them beyond both uncertainties (issue 39):
-#: ring_in_ring's implicit reference (Lagrange multipliers, stick and slip by active set) and its
-#: explicit engine (impulses within Coulomb's limit) both converge, in dt and in the mesh, but
-#: 0.44 % apart on the displacements with friction 0.3 (0.18-0.22 % at r1 without friction):
-#: which engine's friction is right is not yet known. Their key and sharpness are checked, and
-#: the calibration as it stands (recorded, recomputed, and not covered where it is not)
+#: ring_in_ring's, 0.22-0.45 % from its explicit path on the displacements: its mesh correction
+#: is taken at dt / 8, where the implicit engine's time error with friction (first order, 0.3-0.6
+#: %, growing with the mesh) passes for mesh error; at dt / 32 the engines agree to 0.1-0.2 %
+#: (docs/scenes.md). Their key and sharpness are checked, and the calibration as it stands
+#: (recorded, recomputed, and not covered where it is not), until the truth is made again
 UNCALIBRATED = ("ring_in_ring",)
 
 
