@@ -236,7 +236,7 @@ def _mesh_section(case, rep: str) -> RefMesh:
     swept.check_sweepable(case, rep, section)
     if rep == PLANE_STRAIN:  # a ring's annulus: the lowest row of the section swept round the axis
         row = swept.plane_strain_row(case, section)
-        theta = _span_nodes(0.0, 2 * np.pi, _breaks(case, rep)[2], theta_step(case))
+        theta = _span_nodes(0.0, ring_span(case, rep), _breaks(case, rep)[2], theta_step(case))
         x = swept.annulus_nodes(section, row, theta)
         parent = np.tile(row, len(theta) - 1)
         mesh = mesh_from_points(x, groups=swept.pieces(section)[parent])

@@ -64,15 +64,13 @@ def plane_strain_row(case, section) -> np.ndarray:
     X = section.x[section.elements]  # (n_el, 9, 2)
     scale = np.abs(section.x).max()
     key = np.round(X / (1e-9 * scale)).astype(np.int64)
-    rows = [np.unique(key[e, :, c]).size for e in range(len(key)) for c in (0, 1)]
-    bottom = np.flatnonzero(np.abs(X[:, :, 1].min(axis=1) - section.x[:, 1].min()) <= 1e-9 * scale)
-    r_span = sorted((X[e, :, 0].min(), X[e, :, 0].max()) for e in bottom)
-    covered = np.sum([b - a for a, b in r_span])
-    # the x1 spans of the lowest row's elements, and of all elements at any one height, agree
-    same = all(np.isclose(covered, np.sum(X[col, :, 0].max(axis=1) - X[col, :, 0].min(axis=1)), rtol=1e-9)
-               for col in [np.flatnonzero(np.abs(X[:, :, 1].min(axis=1) - z) <= 1e-9 * scale)
-                           for z in np.unique(X[:, :, 1].min(axis=1))])
-    if any(n != 3 for n in rows) or not same:
+    rows = np.sum(np.diff(np.sort(key, axis=1), axis=1) != 0, axis=1) + 1  # (n_el, 2): distinct x1, x2
+    level = key[:, :, 1].min(axis=1)  # each element's lowest x2
+    width = X[:, :, 0].max(axis=1) - X[:, :, 0].min(axis=1)
+    bottom = np.flatnonzero(level == level.min())
+    # the lowest row's elements span as much x1 as those at every other height
+    same = all(np.isclose(width[bottom].sum(), width[level == z].sum(), rtol=1e-9) for z in np.unique(level))
+    if np.any(rows != 3) or not same:
         raise UnsupportedCase(f"reference solver: {case.name}: a mesh section has a plane-strain 2D form only where "
                               "it is a stack of rectangles aligned with r and z, the same at every z; use dim=3")
     return bottom
