@@ -33,7 +33,7 @@ def add(sub) -> None:
 def command(args) -> int:
     """Run (or take from the cache) the truth's levels, write ``history.csv`` and
     ``summary.json``; 3 if a level it needs stopped without a history."""
-    from studies.calibration import calibrate, second_plan
+    from studies.calibration import calibrate, second_plan, widen
     from studies.executors import SchedulerUnreachable
     from studies.stored import key_of
     from studies.truth import plan_for
@@ -62,6 +62,7 @@ def command(args) -> int:
     if args.full:
         truth.key = key_of(case, plan)
         truth.calibration = calibrate(case, truth, made["second path"])
+        widen(truth, truth.calibration)
         made["second path"].write(out / "second")
     truth.write(out)
     print(f"{truth.name}")

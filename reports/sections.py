@@ -182,11 +182,14 @@ def _truth_blocks(an: CaseAnalysis) -> list:
     if cal:
         rows = pd.DataFrame([{"probe": probe, "uncertainty, %": 100 * c["uncertainty"],
                               "second path's uncertainty, %": 100 * c["second_uncertainty"],
-                              "distance, %": 100 * c["distance"], "covered": c["covered"], "sharp": c["sharp"]}
+                              "distance, %": 100 * c["distance"], "covered": c["covered"], "sharp": c["sharp"],
+                              "widened": c.get("widened", False)}
                              for probe, c in cal.items()])
         blocks += [p(f"Calibration: the same truth made on a second, independent path ({t.calibration['second_path']}). "
                      f"Covered: the distance between the two is within the sum of their uncertainties; sharp: the "
-                     f"truth's uncertainty is at most {SHARPNESS:g} times the distance (or {100 * FLOOR:.3g} %)."),
+                     f"truth's uncertainty is at most {SHARPNESS:g} times the distance (or {100 * FLOOR:.3g} %); widened: the "
+                     f"truth's own uncertainty did not cover the distance, so it is stated as the distance plus the "
+                     f"second path's uncertainty."),
                    table(rows)]
     return blocks
 

@@ -415,13 +415,13 @@ def test_explicit_plans_and_their_second_paths():
 # -- stored truths ---------------------------------------------------------------------------------
 SCENES = ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact", "layered_cylinder", "flywheel",
           "layered_cylinder_pulse", "moving_load", "moving_load_notched", "rod_collision")
-#: stored truths whose second path disagrees with them beyond both uncertainties (issue 39):
-#: ring_in_ring's, 0.22-0.45 % from its explicit path on the displacements: its mesh correction
-#: is taken at dt / 8, where the implicit engine's time error with friction (first order, 0.3-0.6
-#: %, growing with the mesh) passes for mesh error; at dt / 32 the engines agree to 0.1-0.2 %
-#: (docs/scenes.md). Their key and sharpness are checked, and the calibration as it stands
-#: (recorded, recomputed, and not covered where it is not), until the truth is made again
-UNCALIBRATED = ("ring_in_ring",)
+#: stored truths whose second path is farther than both uncertainties on some probes, so the
+#: truth's uncertainty there is widened to the distance plus the second path's (issue 39;
+#: studies.calibration.widen): ring_in_ring's implicit and explicit engines stay 0.10-0.18 %
+#: apart on the inner ring's displacements at every mesh r1-r4 and step dt / 32-dt / 64
+#: (docs/scenes.md); its surface stress's first-order mesh ladder is not sharp (0.72 % stated,
+#: 0.15 % from the second path)
+WIDENED = ("ring_in_ring",)
 
 
 def _stored(name):
@@ -443,7 +443,7 @@ def test_a_truths_key_follows_the_case_and_the_method():
     assert key_of(replace(case, title="another title"), plan) == key_of(case, plan)
 
 
-@pytest.mark.parametrize("name", SCENES + UNCALIBRATED)
+@pytest.mark.parametrize("name", SCENES + WIDENED)
 def test_stored_truth_key_matches_its_case(name):
     """A stored truth stands only for the case and method it was made for: when a scene or the
     truth method changes, this fails until ``smfem truth NAME --full`` is run again."""
@@ -456,7 +456,7 @@ def test_stored_truth_key_matches_its_case(name):
         f"truths/{name} no longer matches its case: run 'smfem truth {name} --full'")
 
 
-@pytest.mark.parametrize("name", SCENES + UNCALIBRATED)
+@pytest.mark.parametrize("name", SCENES + WIDENED)
 def test_stored_front_was_measured_against_the_stored_truth(name):
     """``smfem run --tol`` starts from a scene's stored front only while it was measured against
     the stored truth: when the truth is made again, this fails until ``smfem report
@@ -472,7 +472,7 @@ def test_stored_front_was_measured_against_the_stored_truth(name):
     assert expected <= set(front.solver) and (front.total > 0).all() and (front.cpu_s > 0).all()
 
 
-@pytest.mark.parametrize("name", SCENES + UNCALIBRATED)
+@pytest.mark.parametrize("name", SCENES + WIDENED)
 def test_stored_truth_is_sharp_enough_to_judge_its_scene(name):
     """0.3 % on every displacement and velocity probe, 1 % on the stresses (through the
     comparison window where the scene has one); probes on singular points say why they have no
@@ -507,13 +507,15 @@ def test_calibration_of_the_stored_truth(name):
         assert d == pytest.approx(c["distance"], rel=1e-6, abs=1e-12)
         assert d <= truth.uncertainty[probe] + second.uncertainty[probe], (probe, c)
         assert truth.uncertainty[probe] <= SHARPNESS * max(d, FLOOR), (probe, c)
+        assert not c.get("widened"), (probe, c)  # its own uncertainty covers it (WIDENED: where it did not)
 
 
-@pytest.mark.parametrize("name", UNCALIBRATED)
-def test_a_truth_its_second_path_disagrees_with_says_so(name):
-    """The recorded distances are the stored histories' (recomputed), and the calibration says
-    where the uncertainties do not cover them: the displacements of ring_in_ring, 0.22-0.45 %
-    from the explicit path, against 0.06-0.11 % stated (UNCALIBRATED says why)."""
+@pytest.mark.parametrize("name", WIDENED)
+def test_a_widened_truth_covers_its_second_path_and_says_so(name):
+    """The recorded distances are the stored histories' (recomputed); every probe is covered,
+    the widened ones by exactly the distance plus the second path's uncertainty, above their
+    own estimate and with a note; only ring_in_ring's inner-ring displacements are widened, and
+    only a stress is not sharp."""
     from runs.errors import history_errors
     from studies import stored
 
@@ -522,9 +524,32 @@ def test_a_truth_its_second_path_disagrees_with_says_so(name):
     for probe, c in truth.calibration["probes"].items():
         d = history_errors(second.t, second.values[probe], truth.t, truth.values[probe], window)[0]
         assert d == pytest.approx(c["distance"], rel=1e-6, abs=1e-12)
-        assert c["covered"] == (d <= truth.uncertainty[probe] + second.uncertainty[probe])
-    moved = [p.name for p in get_case(name).probes if p.field == "u"]
-    assert not any(truth.calibration["probes"][p]["covered"] for p in moved)
+        assert d <= truth.uncertainty[probe] + second.uncertainty[probe] and c["covered"], (probe, c)
+        if c["widened"]:
+            assert truth.uncertainty[probe] == pytest.approx(d + second.uncertainty[probe], rel=1e-9)
+            assert c["own_uncertainty"] + second.uncertainty[probe] < d and "widened" in truth.notes[probe]
+    cal = truth.calibration["probes"]
+    assert {p for p, c in cal.items() if c["widened"]} == {"A_ur", "B_ut", "C_ur"}
+    stresses = {p.name for p in get_case(name).probes if p.field == "sigma"}
+    assert {p for p, c in cal.items() if not c["sharp"]} <= stresses
+
+
+def test_widen_leaves_a_covered_probe_and_widens_the_others():
+    from types import SimpleNamespace
+
+    from studies.calibration import widen
+
+    truth = SimpleNamespace(uncertainty={"a": 1e-3, "b": 1e-4}, notes={"b": "finest"})
+    cal = {"probes": {"a": {"distance": 1.5e-3, "uncertainty": 1e-3, "second_uncertainty": 1e-3, "covered": True,
+                            "sharp": True},
+                      "b": {"distance": 2e-3, "uncertainty": 1e-4, "second_uncertainty": 5e-4, "covered": False,
+                            "sharp": False}}}
+    assert widen(truth, cal) == ["b"]
+    assert truth.uncertainty == {"a": 1e-3, "b": pytest.approx(2.5e-3)}
+    assert cal["probes"]["a"]["widened"] is False and cal["probes"]["b"]["widened"] is True
+    assert cal["probes"]["b"]["own_uncertainty"] == 1e-4 and cal["probes"]["b"]["covered"]
+    assert cal["probes"]["b"]["sharp"]  # 2.5e-3 <= 3 x 2e-3
+    assert truth.notes["b"].startswith("finest; uncertainty widened from its own 0.01 %")
 
 
 @pytest.mark.slow
