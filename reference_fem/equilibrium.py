@@ -3,7 +3,12 @@
 ``c = a0`` (Newmark) gives one time step, ``c = 0`` a static load step. The effective matrix
 ``K + c M`` is factorized once (scipy ``splu``); elastic steps only back-substitute. The
 elasto-plastic Newton iteration starts with that elastic factorization (exact when no point
-yields) and refactorizes the consistent tangent only while points are yielding.
+yields); while points are yielding it solves the consistent tangent by conjugate gradients
+preconditioned with those same factors (``linear_solver='pcg'``, the default where the tangent
+is symmetric: no factorization in the step) or factorizes it (``'superlu'``). Measured in 3D
+(one thread): the notched cylinder r1 9.0 against 20.3 CPU s, r2 50.5 against 125 s; the
+notched strip r1 19.7 against 27.4 s (16 CG iterations per Newton iteration there, ideal
+plasticity softening the tangent most), r2 129 against 155 s. Histories equal to 5e-13.
 """
 
 from __future__ import annotations
@@ -13,7 +18,7 @@ import functools
 import numpy as np
 
 from . import forms
-from .linalg import factorize
+from .linalg import AUTO, LINEAR_SOLVERS, SUPERLU, PreconditionedTangent, factorize
 
 #: Newton iterations allowed per step before the run stops as not converged
 MAX_ITERATIONS = 50
@@ -95,26 +100,48 @@ class Plastic(Elastic):
     final when no point yields. The material state is committed only on convergence.
     """
 
-    def __init__(self, model, c: float, tol: float):
+    def __init__(self, model, c: float, tol: float, linear_solver: str = AUTO):
         super().__init__(model, c)
         self.tol = tol
+        if linear_solver not in LINEAR_SOLVERS:
+            raise ValueError(f"linear_solver {linear_solver!r}: one of {', '.join(LINEAR_SOLVERS)}")
+        self.linear_solver = linear_solver
+        #: conjugate-gradient iterations on tangents, and tangents factorized after CG gave up
+        self.cg_iterations = self.cg_fallbacks = 0
 
     def _return(self, u):
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):  # a diverged iterate: solve() says so
             return self.law.stress(self.strain(u), self.state)[1]
 
     def _tangent_lu(self, ret):
-        """Factorized ``K_t + c M``: the elastic matrix plus the yielding points' correction."""
+        """``K_t + c M`` ready to solve: the elastic matrix plus the yielding points' correction,
+        by CG on the elastic factors or factorized (module doc)."""
         y = np.flatnonzero(ret.yielding)
         nc = ret.sigma.shape[1]
         By = self.B[(y[:, None] * nc + np.arange(nc)).ravel()]
         dD = self.law.tangent(ret)[y] - forms.at_points(self.model.D, y)
-        dK = By.T @ (forms.material_blocks(dD, self.model.weights[y]) @ By)
-        self.factorizations += 1
-        try:
-            return factorize(self.A + dK)
-        except RuntimeError as exc:  # SuperLU: a singular tangent (collapse without inertia)
-            raise NotConverged(f"the tangent is singular ({exc}): the body has collapsed") from None
+        blocks = dD * self.model.weights[y][:, None, None]
+
+        def factorized():
+            self.factorizations += 1
+            try:
+                return factorize(self.A + By.T @ (forms.material_blocks(dD, self.model.weights[y]) @ By))
+            except RuntimeError as exc:  # SuperLU: a singular tangent (collapse without inertia)
+                raise NotConverged(f"the tangent is singular ({exc}): the body has collapsed") from None
+
+        symmetric = np.allclose(blocks, blocks.transpose(0, 2, 1), rtol=1e-12, atol=1e-12 * np.abs(blocks).max())
+        if self.linear_solver == SUPERLU or (self.linear_solver == AUTO and not symmetric):
+            return factorized()
+        if not symmetric:
+            raise NotConverged("linear_solver=pcg: the law's tangent is not symmetric; use superlu")
+        return PreconditionedTangent(self.A, self.lu, By.tocsr(), blocks, factorized)
+
+    def _count(self, lu) -> None:
+        """Add a tangent's CG iterations (and a fallback to factors) to the run's counts."""
+        if isinstance(lu, PreconditionedTangent):
+            self.cg_iterations += lu.iterations
+            self.cg_fallbacks += lu.factorized
+            lu.iterations = 0
 
     def _residual(self, rhs, u, ret) -> np.ndarray:
         return rhs - forms.internal_forces(self.B, self.model.weights, ret.sigma) - self.c * (self.M @ u)
@@ -144,7 +171,9 @@ class Plastic(Elastic):
                 raise NotConverged(f"Newton diverged at iteration {it} (the residual grew {DIVERGENCE:g} times)")
             done = not ret.yielding.any() if it == 1 else np.linalg.norm(du) <= self.tol * np.linalg.norm(u)
             if done:
+                self._count(lu)
                 self.sigma, self.state = ret.sigma, ret
                 return u, it
+            self._count(lu)
             lu = self._tangent_lu(ret) if ret.yielding.any() else self.lu
         raise NotConverged(f"no convergence in {MAX_ITERATIONS} iterations")

@@ -13,6 +13,7 @@ from cases.recorder import StepRecorder
 from cases.result import RunResult
 
 from .equilibrium import Elastic, NotConverged, Plastic
+from .linalg import AUTO, PCG_RTOL
 from .exact import error_l2
 from .frames import AXISYMMETRIC, mesh_frame_to_cartesian, to_cartesian
 from .mesh import build_mesh, vtk_cells
@@ -24,12 +25,12 @@ from .zones import snapshot as zone_snapshot
 from .wall import ContactLog, WallSystem, case_wall_rows
 
 
-def _system(model: Model, c: float):
+def _system(model: Model, c: float, linear_solver: str = AUTO):
     if model.case.wall is not None:
         return WallSystem(model, c, case_wall_rows(model))
     if model.case.contacts:  # the wall's system on the pairs' rows (:mod:`.pairs`)
         return WallSystem(model, c, case_pair_rows(model))
-    return Plastic(model, c, model.case.params["tol"]) if model.law.nonlinear else Elastic(model, c)
+    return Plastic(model, c, model.case.params["tol"], linear_solver) if model.law.nonlinear else Elastic(model, c)
 
 
 def load_history(model):
@@ -42,7 +43,7 @@ def load_history(model):
 
 
 def solve(case, progress: Callable[[int, int], None] | None = None, every: int = 0,
-          grading: float = 1.0) -> RunResult:
+          grading: float = 1.0, linear_solver: str = AUTO) -> RunResult:
     """Transient response of ``case`` over its time window, Newmark (alpha 0.25, delta 0.5).
 
     Parameters
@@ -51,6 +52,8 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     progress : optional ``callable(step, n_steps)`` called after every step
     every : also the field every ``every`` steps, t = 0 included (``frames``; 0: none)
     grading : mesh grading toward the re-entrant corner lines (:func:`~reference_fem.mesh.build_mesh`)
+    linear_solver : how Newton's tangents are solved (:mod:`reference_fem.linalg`: ``'auto'``,
+        ``'superlu'``, ``'pcg'``)
 
     Returns
     -------
@@ -62,7 +65,9 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
         'peps', the element mean, when plastic, and 'region', the element's index into
         ``case.materials``); ``info``: 'dim',
         'representation', 'element', 'n_elements', 'intorder', 'counts' (elements per mesh
-        direction), 'factorizations' (of K + a0 M and of tangents), 'cpu_mesh_s'; with a wall
+        direction), 'factorizations' (of K + a0 M and of tangents), 'linear_solver', in a plastic
+        run 'cg_iterations', 'cg_fallbacks' and 'cg_rtol' (CG on the tangents, the tangents
+        factorized after CG gave up, CG's relative residual: :mod:`reference_fem.linalg`), 'cpu_mesh_s'; with a wall
         also 'contact_nodes', 'energy_before' and 'energy_after' (kinetic + strain, J, at t = 0
         and at the last step), 'contact_window' (first and last time with a wall force, s, or
         None) and 'max_penetration' (m, over all nodes and steps; 0 if none); with contact pairs
@@ -86,7 +91,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     cpu1 = time.process_time()
     model = Model(case, rmesh)
     dt, n_steps = case.dt, case.n_steps
-    system = _system(model, newmark_constants(dt).a0)
+    system = _system(model, newmark_constants(dt).a0, linear_solver)
     probes = Probes(model)
     free = model.free
     u_full, v_full, a_full = (np.zeros(model.basis.N) for _ in range(3))
@@ -116,7 +121,8 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     exact = {} if case.exact is None else {"error_l2": error_l2(model, u_full, case.exact, recorder.last_time)}
     return recorder.result(
         n_dof=int(free.size), cpu_time_s=cpu, mesh=output_mesh(model, u_full, system, v_full),
-        info=dict(_info(model, system, cpu_mesh), grading=grading, **(log.info() if log else {}), **exact),
+        info=dict(_info(model, system, cpu_mesh), grading=grading, linear_solver=linear_solver,
+                  **(log.info() if log else {}), **exact),
     )
 
 
@@ -188,6 +194,9 @@ def _info(model: Model, system, cpu_mesh: float) -> dict:
         "intorder": INTORDER,
         "counts": model.rmesh.counts,
         "factorizations": system.factorizations,
+        # Newton tangents solved by CG on the elastic factors (reference_fem.linalg)
+        **({"cg_iterations": system.cg_iterations, "cg_fallbacks": system.cg_fallbacks, "cg_rtol": PCG_RTOL}
+           if hasattr(system, "cg_iterations") else {}),
         "cpu_mesh_s": cpu_mesh,
     }
 
