@@ -124,8 +124,10 @@ def test_plastic_iterations(cylinder_plastic):
     first_plastic = int(np.argmax(its > 1))
     assert first_plastic > 0 and np.all(its[:first_plastic] == 1)
     assert its.max() <= 5
-    # each non-final Newton iteration of a yielding step refactorizes the tangent, nothing else
-    assert cylinder_plastic.info["factorizations"] == 1 + int(np.sum(its - 1))
+    # each non-final Newton iteration of a yielding step solves a new tangent, by CG on the one
+    # elastic factorization (reference_fem.linalg): no other factorization
+    assert cylinder_plastic.info["factorizations"] == 1 and cylinder_plastic.info["cg_fallbacks"] == 0
+    assert cylinder_plastic.info["cg_iterations"] >= int(np.sum(its - 1))
     h = cylinder_plastic.history
     assert np.all(h["peps_max"] >= h["peps_A"]) and h["peps_max"].max() > 1e-3
     assert np.all(h["peps_max"][: first_plastic + 1] == 0.0)
