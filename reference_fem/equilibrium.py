@@ -58,6 +58,8 @@ class Elastic:
         self.factorizations = 1
         nc = forms.n_components(model.dim)
         self.sigma = np.zeros((model.n_qp, nc))
+        self._u, self._nc = None, nc  # the solution whose stress is not computed yet (see ``sigma``)
+        self._rows = {}  # a probe's quadrature point -> its rows of B
         self.law = model.law
         self.state = self.law.initial_state(model.n_qp)
 
@@ -73,9 +75,32 @@ class Elastic:
     def peps(self) -> np.ndarray:
         return self.law.equivalent_plastic_strain(self.state)
 
+    @property
+    def sigma(self) -> np.ndarray:
+        """The stress of the last solution at every quadrature point, ``(n_qp, nc)``: an elastic
+        step computes it only when asked (a step's probes read a few points, :meth:`stress_at`;
+        the product over all points cost a third of a 3D step's back-substitution)."""
+        if self._sigma is None:
+            self._sigma = self.elastic_stress(self._u)
+        return self._sigma
+
+    @sigma.setter
+    def sigma(self, value: np.ndarray) -> None:
+        self._sigma = value
+
+    def _elastic_solution(self, u: np.ndarray) -> None:
+        """``u`` is the step's solution: its stress is ``D B u``, computed when read."""
+        self._u, self._sigma = u, None
+
     def stress_at(self, q: int) -> np.ndarray:
         """The stress at quadrature point ``q``, ``(nc,)`` (Mandel, mesh frame)."""
-        return self.sigma[q]
+        if self._sigma is not None:
+            return self._sigma[q]
+        nc = self._nc
+        if q not in self._rows:
+            self._rows[q] = self.B[q * nc:(q + 1) * nc]
+        D = self.model.D if self.model.D.ndim == 2 else self.model.D[q]
+        return D.T @ (self._rows[q] @ self._u)
 
     def strain(self, u: np.ndarray) -> np.ndarray:
         """Mandel strain at every quadrature point, ``(n_qp, nc)``, of free-dof values ``u``."""
@@ -88,7 +113,7 @@ class Elastic:
     def solve(self, rhs: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, int]:
         """Solution and iteration count (1) for the right-hand side ``rhs`` (free dofs)."""
         u = self.lu.solve(rhs)
-        self.sigma = self.elastic_stress(u)
+        self._elastic_solution(u)
         return u, 1
 
 

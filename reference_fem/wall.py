@@ -43,7 +43,7 @@ class WallSystem(Elastic):
         H = self.rows.H
         self.state, its = self.contact.solve(H @ u_star, H @ u, self.state)
         u = u_star + self.contact.W @ self.state.p
-        self.sigma = self.elastic_stress(u)
+        self._elastic_solution(u)
         return u, its
 
 
