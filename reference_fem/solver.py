@@ -43,7 +43,7 @@ def load_history(model):
 
 
 def solve(case, progress: Callable[[int, int], None] | None = None, every: int = 0,
-          grading: float = 1.0, linear_solver: str = AUTO) -> RunResult:
+          grading: float = 1.0, linear_solver: str = AUTO, bbar: bool = False) -> RunResult:
     """Transient response of ``case`` over its time window, Newmark (alpha 0.25, delta 0.5).
 
     Parameters
@@ -54,6 +54,9 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     grading : mesh grading toward the re-entrant corner lines (:func:`~reference_fem.mesh.build_mesh`)
     linear_solver : how Newton's tangents are solved (:mod:`reference_fem.linalg`: ``'auto'``,
         ``'superlu'``, ``'pcg'``)
+    bbar : the volumetric strain projected per element (B-bar, as the explicit engine's option):
+        nearly incompressible plastic flow does not lock the element (the notched cylinder 2D at
+        r1 and r2: 4.3 and 2.9 % from its truth against 6.5 and 4.3 % without)
 
     Returns
     -------
@@ -89,7 +92,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     rmesh = build_mesh(case, grading)
     cpu_mesh = time.process_time() - cpu0
     cpu1 = time.process_time()
-    model = Model(case, rmesh)
+    model = Model(case, rmesh, bbar=bbar)
     dt, n_steps = case.dt, case.n_steps
     system = _system(model, newmark_constants(dt).a0, linear_solver)
     probes = Probes(model)
@@ -121,7 +124,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     exact = {} if case.exact is None else {"error_l2": error_l2(model, u_full, case.exact, recorder.last_time)}
     return recorder.result(
         n_dof=int(free.size), cpu_time_s=cpu, mesh=output_mesh(model, u_full, system, v_full),
-        info=dict(_info(model, system, cpu_mesh), grading=grading, linear_solver=linear_solver,
+        info=dict(_info(model, system, cpu_mesh), grading=grading, linear_solver=linear_solver, bbar=bbar,
                   **(log.info() if log else {}), **exact),
     )
 

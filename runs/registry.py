@@ -260,20 +260,20 @@ def _reference_checks() -> dict:
 
 #: the reference FEM's own options, checked as case parameters are (here, not in its package:
 #: ``smfem run`` reads every solver's option names and must not load the reference to do so)
-_MESH_OPTIONS = {
+_ELEMENT_OPTIONS = {
     # beta of the geometric grading toward a cut-out's corner lines (1: uniform); far past 8 the
     # smallest element is a round-off of the span
     "grading": Spec(float, 1.0, 8.0, help="mesh grading toward the re-entrant corner lines (1: uniform)"),
+    "bbar": Spec(bool, help="B-bar: the volumetric strain projected per element"),
 }
 _REFERENCE_OPTIONS = {
-    **_MESH_OPTIONS,
+    **_ELEMENT_OPTIONS,
     # reference_fem.linalg.LINEAR_SOLVERS (named here: this module must not import the reference)
     "linear_solver": Spec(str, choices=("auto", "superlu", "pcg"),
                           help="Newton tangents: CG on the elastic factors (pcg), factorized (superlu), or auto"),
 }
 _EXPLICIT_OPTIONS = {
-    **_MESH_OPTIONS,
-    "bbar": Spec(bool, help="B-bar: the volumetric strain projected per element"),
+    **_ELEMENT_OPTIONS,
     "step_divisor": Spec(int, 1, 1000, help="divides the explicit step (a time ladder)"),
 }
 

@@ -59,16 +59,17 @@ def stored_truth(study: CaseStudy) -> tuple[Truth | None, str]:
 
 
 def job_of(study: CaseStudy):
-    """``job(solver, level)``: the study's job of a level. The SMFEM run at the case's own
-    settings writes fields.vtu, whichever level resolves to them."""
+    """``job(solver, level, options=())``: the study's job of a level (with its series' solver
+    options). The SMFEM run at the case's own settings writes fields.vtu, whichever level
+    resolves to them."""
     def params(level):
         return get_case(study.case, {**study.base, **level}).params
 
     shown = params({})
 
-    def job(solver, level):
-        return Job.make(study.case, solver, {**study.base, **level},
-                        fields=solver == SMFEM and params(level) == shown)
+    def job(solver, level, options=()):
+        return Job.make(study.case, solver, {**study.base, **level}, options=dict(options),
+                        fields=solver == SMFEM and params(level) == shown and not options)
     return job
 
 
@@ -77,7 +78,7 @@ def _jobs(study: CaseStudy, stored: bool) -> tuple[dict, Job, Job, dict]:
     which writes fields.vtu (the series run with those parameters, when there is one), and of
     the truth by role (none when a ``stored`` truth stands in)."""
     job = job_of(study)
-    series = {s.solver: [job(s.solver, level) for level in s.levels] for s in study.series}
+    series = {s.solver: [job(s.solver, level, s.options) for level in s.levels] for s in study.series}
     fields = next((j for j in series.get(SMFEM, ()) if j.fields), None) or job(SMFEM, {})
     truth = truth_jobs(study.case, study.truth, study.base) if study.truth and not stored else {}
     return series, job(*study.reference) if study.reference else None, fields, truth

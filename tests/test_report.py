@@ -519,3 +519,21 @@ def test_work_precision_and_history_figures_keep_their_text_inside(tiny, tmp_pat
     for fig, an in zip(kept[1:-1:2], tiny.analyses):
         labels = [ax.get_ylabel() for ax in fig.axes]
         assert all(", " in label and label.split(", ")[-1] for label in labels), labels
+
+
+def test_a_series_carries_its_solver_options_to_its_jobs_and_labels():
+    """The full report's 3D notched cylinder is the reference with B-bar elements: its jobs carry
+    the option (a run of its own in the cache) and its labels say so; a series without options
+    makes the jobs it always made."""
+    from studies.plan import _s, full
+    from studies.study import _jobs
+
+    study = CaseStudy("notched_cylinder", (_s(REF3D, {"refine": 1}, bbar=True), _s(REF2D, {"refine": 1})),
+                      reference=None)
+    series, _, _, _ = _jobs(study, stored=True)
+    bbar, plain = series[REF3D][0], series[REF2D][0]
+    assert dict(bbar.options) == {"bbar": True} and plain.options == ()
+    assert plain == Job.make("notched_cylinder", REF2D, {"refine": 1})
+    assert Run(bbar, "ok", "", None).label == "r1 bbar"
+    nc = next(s for s in full() if s.case == "notched_cylinder")
+    assert dict(next(s for s in nc.series if s.solver == REF3D).options) == {"bbar": True}
