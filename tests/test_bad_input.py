@@ -87,7 +87,8 @@ def test_every_solver_option_out_of_range_exits_2_naming_it(solver):
             assert_one_clear_line(o["stderr"], key)
             assert spec.describe() in o["stderr"] and not o["written"], (key, text, o)
             count += 1
-    assert count >= 5 * len(lookup(solver).options())
+    # every option swept: at least 3 bad values each (a flag or a word has 3, a number 5 or more)
+    assert count >= 3 * len(lookup(solver).options())
 
 
 @pytest.mark.parametrize("text", ["-5", "0", "nan", "inf", "1e300"])
