@@ -32,7 +32,7 @@ class Progress:
         self.total, self.desc, self.unit = total, desc, unit
         self.stream = stream or sys.stderr
         self.clock = clock
-        self.n, self.note = 0, ""
+        self.n, self.note, self.left = 0, "", ""
         self._bar = None
         self._lines = False
         if enabled and total > 0:
@@ -44,11 +44,14 @@ class Progress:
                 self._lines = True
                 self._start = self._last = clock()
 
-    def update(self, n: int, note: str = "") -> None:
+    def update(self, n: int, note: str = "", left_s: float | None = None) -> None:
+        """``n`` done so far; ``note``: what just finished; ``left_s``: an estimate of the
+        seconds left (said as "about ... left"), where the caller has one."""
         step, self.n, self.note = n - self.n, n, note or self.note
+        self.left = "" if left_s is None or n >= self.total else f"about {_duration(left_s)} left"
         if self._bar is not None:
-            if note:
-                self._bar.set_postfix_str(note, refresh=False)
+            if note or self.left:
+                self._bar.set_postfix_str(", ".join(x for x in (self.left, note) if x), refresh=False)
             self._bar.update(step)
         elif self._lines and self.clock() - self._last >= INTERVAL and n < self.total:
             self._line()
@@ -64,7 +67,8 @@ class Progress:
     def _line(self) -> None:
         self._last = self.clock()
         note = f" ({self.note})" if self.note else ""
-        print(f"{self.desc}: {self.n}/{self.total} {self.unit}s, {self._last - self._start:.0f} s{note}",
+        left = f", {self.left}" if self.left else ""
+        print(f"{self.desc}: {self.n}/{self.total} {self.unit}s, {self._last - self._start:.0f} s{left}{note}",
               file=self.stream, flush=True)
 
     def __enter__(self):
@@ -72,3 +76,12 @@ class Progress:
 
     def __exit__(self, *exc):
         self.close()
+
+
+def _duration(seconds: float) -> str:
+    """``40 s``, ``12 min``, ``2.5 h``."""
+    if seconds < 90:
+        return f"{max(seconds, 1):.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"

@@ -119,6 +119,7 @@ class RunCache:
         self.root = Path(root)
         self.warn = warn or (lambda line: print(line, file=sys.stderr))
         self._paths: dict[Job, Path] = {}  # a job's key is made once (a study asks several times)
+        self._walls: dict[str, float] | None = None  # earlier runs' wall times by key without version
 
     def path(self, job: Job) -> Path:
         if job not in self._paths:
@@ -138,6 +139,24 @@ class RunCache:
             self.warn(f"cache: {job.describe()}: {damage} ({path}); running it again")
             return None
         return _read(job, record["status"], record["message"], path)
+
+    def previous_wall(self, job: Job) -> float | None:
+        """The wall time (s) of the last run of ``job`` made by any code version (the cache keeps
+        the runs of earlier versions beside the current ones), or None: what a study expects
+        the run to take (:func:`studies.study.run_cached`'s estimate of the time left)."""
+        if self._walls is None:
+            self._walls = {}
+            for path in self.root.glob("*/*/*/job.json"):
+                try:
+                    key = json.loads(path.read_text())["key"]
+                    wall = float(json.loads((path.parent / "summary.json").read_text())["wall_time_s"])
+                except (OSError, ValueError, KeyError, TypeError):
+                    continue  # no summary (a refused or failed run) or a damaged entry: no estimate
+                key.pop("version", None)
+                self._walls[json.dumps(key, sort_keys=True, default=str)] = wall
+        key = key_of(job)
+        key.pop("version", None)
+        return self._walls.get(json.dumps(json.loads(json.dumps(key, default=str)), sort_keys=True, default=str))
 
     def store(self, job: Job, outcome: Outcome) -> Run:
         """Write ``outcome`` atomically (a crash leaves no half run); a failure or a missing

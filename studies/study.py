@@ -103,11 +103,23 @@ def run_cached(jobs: list[Job], cache: RunCache, scheduler: str | None = None, w
         wanted.setdefault(cache.path(job), job)
     found = {path: run for path, job in wanted.items() if (run := cache.load(job)) is not None}
     missing = sorted((job for path, job in wanted.items() if path not in found), key=_cost_order)
+    expected = {job: cache.previous_wall(job) for job in missing} if progress else {}
     with Progress(len(missing), "study", "run", enabled=progress) as bar:
         for done, (job, outcome) in enumerate(run_jobs(missing, scheduler, workers), start=1):
             found[cache.path(job)] = cache.store(job, outcome)
-            bar.update(done, job.describe())
+            expected.pop(job, None)
+            bar.update(done, job.describe(), time_left(expected, workers))
     return {job: found[cache.path(job)] for job in jobs}, missing, len(wanted) - len(missing)
+
+
+def time_left(expected: dict, workers: int) -> float | None:
+    """Seconds the runs not finished yet should take on ``workers``: their earlier wall times
+    (``expected``, job -> seconds or None), a run without one counted at the mean of the known;
+    None when none is known."""
+    known = [w for w in expected.values() if w is not None]
+    if not known:
+        return None
+    return (sum(known) + (len(expected) - len(known)) * sum(known) / len(known)) / max(workers, 1)
 
 
 def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | None = None, workers: int = 2,
