@@ -224,7 +224,9 @@ def test_study_on_a_dask_local_cluster_matches_the_local_processes(tiny, tmp_pat
 
     plan = (CaseStudy("dome", (Series(SMFEM, ({"refine": 1}, {"refine": 2})),),
                       reference=(REF2D, {"refine": 4}), base={"t_end": 4e-5}),)
-    with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
+    # two worker processes of one thread each, as `dask worker ADDRESS --nworkers 2 --nthreads 1`
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        assert len(cluster.workers) == 2
         report = build(plan, tmp_path, scheduler=cluster.scheduler_address, progress=False, document=False)
     assert len(report.study.executed) == 3
     mine = report.analyses[0].runs.series[SMFEM][1].history
