@@ -195,10 +195,9 @@ class Plastic(Elastic):
             if np.linalg.norm(r) > DIVERGENCE * first:
                 raise NotConverged(f"Newton diverged at iteration {it} (the residual grew {DIVERGENCE:g} times)")
             done = not ret.yielding.any() if it == 1 else np.linalg.norm(du) <= self.tol * np.linalg.norm(u)
+            self._count(lu)
             if done:
-                self._count(lu)
                 self.sigma, self.state = ret.sigma, ret
                 return u, it
-            self._count(lu)
             lu = self._tangent_lu(ret) if ret.yielding.any() else self.lu
         raise NotConverged(f"no convergence in {MAX_ITERATIONS} iterations")

@@ -107,6 +107,14 @@ class Run:
         return self.history is not None and len(self.history) > 1
 
 
+def _without_version(key: dict) -> str:
+    """A run's key as job.json stores it (JSON, values it cannot hold as text), sorted, without
+    the code version: one run's identity across versions."""
+    plain = json.loads(json.dumps(key, default=str))
+    plain.pop("version", None)
+    return json.dumps(plain, sort_keys=True)
+
+
 def _sha256(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
@@ -152,11 +160,8 @@ class RunCache:
                     wall = float(json.loads((path.parent / "summary.json").read_text())["wall_time_s"])
                 except (OSError, ValueError, KeyError, TypeError):
                     continue  # no summary (a refused or failed run) or a damaged entry: no estimate
-                key.pop("version", None)
-                self._walls[json.dumps(key, sort_keys=True, default=str)] = wall
-        key = key_of(job)
-        key.pop("version", None)
-        return self._walls.get(json.dumps(json.loads(json.dumps(key, default=str)), sort_keys=True, default=str))
+                self._walls[_without_version(key)] = wall
+        return self._walls.get(_without_version(key_of(job)))
 
     def store(self, job: Job, outcome: Outcome) -> Run:
         """Write ``outcome`` atomically (a crash leaves no half run); a failure or a missing
