@@ -18,6 +18,9 @@ def add(sub) -> None:
     report = sub.add_parser("report", help="the verification report: index.html, report.pdf, tables/*.csv")
     add_study_options(report, "out/report")
     _store_fronts(report)
+    report.add_argument("--publish", default=None, metavar="DIR",
+                        help="also keep tables/headline.csv, fronts.csv, carried.csv and run.json (wall time, machine, "
+                             "peak memory) in DIR: the findings README quotes (docs/full-report for --full)")
     report.set_defaults(handler=command)
 
 
@@ -38,6 +41,9 @@ def command(args) -> int:
     plan = select(full() if args.full else quick(), getattr(args, "cases", ()))
     out = Path(args.out)
     check_writable(out)
+    publish_to = getattr(args, "publish", None) and Path(args.publish)
+    if publish_to:
+        check_writable(publish_to, "--publish")
     try:
         report = build(plan, out, cache=args.cache and Path(args.cache), scheduler=args.scheduler,
                        workers=args.workers, progress=not args.quiet, settings="full" if args.full else "quick",
@@ -49,6 +55,12 @@ def command(args) -> int:
     made = "index.html, report.pdf, " if args.command == "report" else ""
     print(f"{args.command}: {len(report.study.executed)} runs executed, {report.study.cached} cached, "
           f"{report.wall_time_s:.1f} s -> {out}/ ({made}tables/, figures/)")
+    if publish_to:
+        from reports.publish import publish
+
+        made = publish(report, publish_to, "full" if args.full else "quick", args.workers, args.scheduler)
+        print(f"{args.command}: published to {publish_to}/ (tables/, run.json: {made['wall_time_s']:.0f} s wall, "
+              f"largest run {made['peak_memory_mb']} MB)")
     if getattr(args, "store_fronts", False):
         from studies.stored import write_fronts
 

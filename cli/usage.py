@@ -22,7 +22,7 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-def check_writable(out: Path) -> None:
+def check_writable(out: Path, flag: str = "--out") -> None:
     """Fail early, before any work and without leaving anything, if ``out`` cannot be written.
 
     Tries to make a scratch directory in the nearest existing ancestor: permission bits alone
@@ -32,11 +32,11 @@ def check_writable(out: Path) -> None:
     while not probe.exists():
         probe = probe.parent
     if out.exists() and not out.is_dir():
-        raise UsageError(f"--out {out}: exists and is not a directory")
+        raise UsageError(f"{flag} {out}: exists and is not a directory")
     try:
         os.rmdir(tempfile.mkdtemp(dir=probe, prefix=".smfem-write-test-"))
     except OSError as exc:
-        raise UsageError(f"--out {out}: cannot write there ({exc.strerror})") from None
+        raise UsageError(f"{flag} {out}: cannot write there ({exc.strerror})") from None
 
 
 def add_sets(p, help_text: str | None = None, dest: str = "sets", flag: str = "--set") -> None:

@@ -24,7 +24,7 @@ from studies.study import CaseRuns
 #: probes whose errors make the headline measure: displacements and velocities. Stresses
 #: (wave fronts, the rod's impact) and plastic strains (a local threshold quantity, zero until a
 #: point yields) have their own measures and targets (:data:`FAMILIES`)
-HEADLINE_FIELDS = ("u", "v")
+HEADLINE_FIELDS = metrics.HEADLINE_FIELDS
 HEADLINE_MEASURE = "max over displacement and velocity probes of the relative max-norm error"
 TOTAL, SPATIAL, PUBLISHED = "total", "spatial", "published"
 #: the probe families other than the headline's: name -> (probe fields, error targets)

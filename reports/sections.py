@@ -20,6 +20,7 @@ from studies.cache import code_version
 from studies.effectivity import BAND
 from studies.effectivity import summary as effectivity_summary
 from studies.metrics import TARGETS, TRUTH_MARGIN
+from runs.registry import lookup
 from studies.plan import REFERENCE, SMFEM
 from studies.study import StudyResult
 from .tables import truth_table
@@ -205,6 +206,9 @@ def _case(ctx: ReportContext, an: CaseAnalysis) -> Section:
     blocks += _truth_blocks(an)
     if "work_precision" in figs:
         blocks.append(figure(ctx.out / figs["work_precision"], f"{name}: work-precision diagram (total error)"))
+    if an.runs.carried:
+        blocks += [p("Series carried along their ladders (cheapest level first, studies/ladder.py):"),
+                   items([f"{lookup(s).label}: {outcome}" for s, outcome in an.runs.carried.items()])]
     blocks += [h("Every run: total error against the truth, and the same-dt difference"), table(_levels_table(an))]
     if len(an.orders):
         blocks += [h("Observed orders of the headline measure (log-log fit)"),

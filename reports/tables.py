@@ -38,6 +38,7 @@ def runs_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
             rows.append({"case": an.case.name, "solver": solver, "role": role, "level": run.label,
                          "status": run.status, "n_dof": s.get("n_dof"), "n_steps": s.get("n_steps"),
                          "cpu_time_s": s.get("cpu_time_s"), "wall_time_s": s.get("wall_time_s"),
+                         "peak_memory_mb": s.get("peak_memory_mb"),
                          "iterations_mean": (s.get("iterations") or {}).get("mean"),
                          "iterations_max": (s.get("iterations") or {}).get("max"),
                          "inside_model": inside_model(s.get("validity")),
@@ -183,6 +184,14 @@ def truth_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def carried_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
+    """Per carried series (:mod:`studies.ladder`): how far it climbed and why it stopped."""
+    rows = [{"case": an.case.name, "solver": solver, "runs": len(an.runs.series.get(solver, [])),
+             "levels": len(next(s.levels for s in an.runs.study.series if s.solver == solver)), "outcome": outcome}
+            for an in analyses for solver, outcome in an.runs.carried.items()]
+    return pd.DataFrame(rows, columns=["case", "solver", "runs", "levels", "outcome"])
+
+
 def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFrame]:
     """Write ``out/*.csv`` and return the tables by name."""
     out.mkdir(parents=True, exist_ok=True)
@@ -198,6 +207,7 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "published": pd.concat([an.published for an in analyses], ignore_index=True),
         "effectivity": effectivity_table(analyses),
         "fronts": fronts_table(analyses),
+        "carried": carried_table(analyses),
     }
     for name, table in tables.items():
         table.to_csv(out / f"{name}.csv", index=False, float_format="%.6g")
@@ -219,7 +229,9 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "orders.csv: observed orders (log-log fit of the headline measure against dt or the mesh);\n"
         "  reading: what an order below 0.5 or negative means\n"
         "published.csv: extrema found near published extrema\n"
-        "runs.csv: every run (series, same-dt reference, truth levels), its status, size and cost, and inside_model: yes, or which small-strain limit it passes (runs.validity);\n"
+        "runs.csv: every run (series, same-dt reference, truth levels), its status, size and cost (peak_memory_mb:\n"
+        "  the worker's resident high-water mark during the run, runs.memory), and inside_model: yes, or which\n"
+        "  small-strain limit it passes (runs.validity);\n"
         "  estimated_error: the run's own error estimate (runs.estimate), where the study measured it\n"
         "effectivity.csv: per solver, setting (defaults, refine 2, dt/2) and displacement or velocity probe, the\n"
         "  run's error estimate and its parts, its actual error against the truth and effectivity = estimate /\n"
@@ -227,5 +239,7 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         f"[{BAND[0]:g}, {BAND[1]:g}]\n"
         "fronts.csv: per run with a total error, its settings (refine, coarsen, harmonics, dt, dim, element,\n  time_scheme), CPU, total\n"
         "  error (headline measure), on_front and the key of the truth it was measured against; smfem report\n"
-        "  --store-fronts keeps it with the stored truths (truths/CASE/front.csv), where smfem run --tol starts\n")
+        "  --store-fronts keeps it with the stored truths (truths/CASE/front.csv), where smfem run --tol starts\n"
+        "carried.csv: per series carried along its ladder to a target or a CPU budget (the full report's):\n"
+        "  the runs it made of its levels and where it stopped, and why\n")
     return tables

@@ -56,6 +56,15 @@ class Progress:
         elif self._lines and self.clock() - self._last >= INTERVAL and n < self.total:
             self._line()
 
+    def grow(self, more: int) -> None:
+        """``more`` to do than the total said (a study's runs asked for as others finish)."""
+        if more <= 0:
+            return
+        self.total += more
+        if self._bar is not None:
+            self._bar.total = self.total
+            self._bar.refresh()
+
     def close(self) -> None:
         if self._bar is not None:
             self._bar.close()

@@ -34,10 +34,11 @@ from .jobs import FAILED, NOT_INSTALLED, Job, Outcome
 
 #: packages whose source decides every solver's results (each adds its own, :mod:`runs.registry`)
 SHARED_SOURCES = ("cases", "runs")
-#: modules of those packages that decide nothing in a run's files (they draw, report, or read
-#: finished runs: the error estimate and the --tol search): editing them must not send a report
-#: back to rerunning every solve
-PRESENTATION = {"runs/figures.py", "runs/progress.py", "runs/estimate.py", "runs/tolerance.py", "runs/errors.py"}
+#: modules of those packages that decide nothing in a run's results (they draw, report, measure
+#: the memory, or read finished runs: the error estimate and the --tol search): editing them must
+#: not send a report back to rerunning every solve
+PRESENTATION = {"runs/figures.py", "runs/progress.py", "runs/memory.py", "runs/estimate.py", "runs/tolerance.py",
+                "runs/errors.py"}
 
 
 @functools.cache

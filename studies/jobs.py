@@ -15,7 +15,7 @@ from pathlib import Path
 
 from cases import UnsupportedCase, get_case
 from cases.params import ToolMissing
-from runs import threads
+from runs import memory, threads
 from runs.files import write_run
 from runs.registry import FIELDS, Solver, lookup, solve
 
@@ -94,6 +94,7 @@ def execute(job: Job, solver: Solver | None = None) -> Outcome:
     threads.pin()  # a dask worker too: a run's CPU means one core's work wherever it runs
     solver = solver or lookup(job.solver)
     case = job.build()
+    memory.reset_peak()
     wall0 = time.perf_counter()
     try:
         result = solve(solver, case, fields=job.fields, every=series_every(case) if job.fields else 0,
@@ -109,6 +110,6 @@ def execute(job: Job, solver: Solver | None = None) -> Outcome:
     with tempfile.TemporaryDirectory(prefix="smfem-job-") as tmp:
         out = Path(tmp)
         # the zones' data only: the report draws the figure it shows (SMFEM beside the reference)
-        write_run(out, case, solver.family, result, wall, zone_figure=False)
+        write_run(out, case, solver.family, result, wall, zone_figure=False, extra={"peak_memory_mb": memory.peak_mb()})
         files = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
     return Outcome(OK if result.converged else NOT_CONVERGED, result.message, files)

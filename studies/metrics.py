@@ -79,6 +79,21 @@ def richardson(h, q) -> Richardson | None:
     return Richardson(p, q3 - d2 * h3**p / (h2**p - h3**p))
 
 
+#: the probes of the headline measure: displacements and velocities (stresses and plastic
+#: strains have their own families, singular ones among them)
+HEADLINE_FIELDS = ("u", "v")
+
+
+def headline_error(case, truth, t, history) -> float:
+    """The headline measure of one run (``t``, ``history[probe]``) against ``truth``: the largest
+    relative max-norm error over the case's displacement and velocity probes that the truth has
+    converged, through the case's comparison window; NaN where it has none."""
+    window = case.references.get("comparison_window_s", 0.0)
+    errors = [history_errors(t, np.asarray(history[p.name]), truth.t, truth.values[p.name], window)[0]
+              for p in case.probes if p.field in HEADLINE_FIELDS and p.name in truth.values and truth.converged(p.name)]
+    return max(errors) if errors else math.nan
+
+
 #: error levels of the headline: CPU time to reach each
 TARGETS = (0.01, 0.05)
 #: a target is checked only if it is at least this many times the truth's uncertainty

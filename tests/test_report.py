@@ -17,7 +17,7 @@ from reports.analysis import analyse
 from reports.build import build
 from studies.cache import Run, RunCache
 from studies.jobs import NOT_AVAILABLE, NOT_INSTALLED, Job, execute
-from studies.plan import CALCULIX, MODAL_TRUTH, REF2D, REF3D, SMFEM, SMFEM_QUAD9, TIME_TRUTH, CaseStudy, Series, TruthPlan, grid, quick
+from studies.plan import CALCULIX, MODAL_TRUTH, REF2D, REF3D, SMFEM, SMFEM_QUAD9, TIME_TRUTH, CaseStudy, Series, TruthPlan, Until, grid, quick
 from reports.references import rod_histories
 from studies.study import CaseRuns
 from reports.tables import headline_table
@@ -139,6 +139,21 @@ def test_stresses_have_their_own_table_and_stay_out_of_the_headline(tmp_path):
             assert table.loc[solver, "best_error_pct"] == pytest.approx(100 * worst[solver].min(), rel=1e-6)
 
 
+def test_the_full_report_carries_every_series_against_a_stored_truth_with_both_smfem_elements():
+    """Every series of more than one level climbs its ladder to 1 % or its CPU budget, which needs
+    the scene's stored truth (its key the full plan's: a truth computed by the study comes too late
+    to judge a ladder); the paper's five scenes have both SMFEM elements."""
+    from studies.plan import FULL_UNTIL, full
+    from studies.study import stored_truth
+
+    for study in full():
+        assert all(s.until == FULL_UNTIL for s in study.series if len(s.levels) > 1), study.case
+        truth, why = stored_truth(study)
+        assert truth is not None, (study.case, why)
+        if study.case in ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact"):
+            assert {SMFEM, SMFEM_QUAD9} <= {s.solver for s in study.series}, study.case
+
+
 def test_every_case_of_the_quick_report_has_a_truth():
     assert all(study.truth is not None for study in quick())
     for study in quick():
@@ -219,19 +234,34 @@ def test_damaged_cache_entries_are_run_again_and_the_report_is_unchanged(tiny, t
     assert build(TINY, tmp_path / "third", cache=cache, progress=False, document=False).study.executed == []
 
 
-def test_study_on_a_dask_local_cluster_matches_the_local_processes(tiny, tmp_path):
+def test_study_on_a_dask_local_cluster_matches_the_local_processes_and_carries_a_ladder(tiny, tmp_path,
+                                                                                        monkeypatch):
+    """Two dask worker processes run a series carried to a target (the tiny report's dome truth
+    standing in for a stored one): each next level is submitted while the cluster runs, the
+    ladder stops at its first run within the target, and its histories are the local ones."""
+    import studies.study
     from distributed import LocalCluster
 
-    plan = (CaseStudy("dome", (Series(SMFEM, ({"refine": 1}, {"refine": 2})),),
+    dome = tiny.analyses[0]
+    case = get_case("dome", {"t_end": 4e-5})
+    local = {r.label: r for r in dome.runs.series[SMFEM]}
+    errors = [metrics.headline_error(case, dome.truth, local[f"r{n} H1"].history["t"].to_numpy(),
+                                     local[f"r{n} H1"].history) for n in (1, 2)]
+    assert errors[1] < errors[0], errors  # the ladder below stops at r2, with r3 not run
+    until = Until(target=(errors[0] + errors[1]) / 2, budget_s=600)
+    plan = (CaseStudy("dome", (Series(SMFEM, ({"refine": 1}, {"refine": 2}, {"refine": 3}), until=until),),
                       reference=(REF2D, {"refine": 4}), base={"t_end": 4e-5}),)
+    monkeypatch.setattr(studies.study, "stored_truth", lambda study: (dome.truth, "the tiny report's"))
     # two worker processes of one thread each, as `dask worker ADDRESS --nworkers 2 --nthreads 1`
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         assert len(cluster.workers) == 2
         report = build(plan, tmp_path, scheduler=cluster.scheduler_address, progress=False, document=False)
-    assert len(report.study.executed) == 3
-    mine = report.analyses[0].runs.series[SMFEM][1].history
-    local = next(r for r in tiny.analyses[0].runs.series[SMFEM] if r.label == "r2 H1").history
-    np.testing.assert_allclose(mine.to_numpy(), local.to_numpy(), rtol=1e-12, atol=1e-15)
+    assert len(report.study.executed) == 3  # r1, then r2; the 2D reference beside them
+    runs = report.analyses[0].runs
+    assert [r.label for r in runs.series[SMFEM]] == ["r1 H1", "r2 H1"]
+    assert runs.carried[SMFEM].startswith(f"{until.describe()}: reached") and " at r2 H1 " in runs.carried[SMFEM]
+    np.testing.assert_allclose(runs.series[SMFEM][1].history.to_numpy(), local["r2 H1"].history.to_numpy(),
+                               rtol=1e-12, atol=1e-15)
 
 
 @pytest.mark.skipif(chromium() is None, reason="no Chromium on this machine (Debian package 'chromium')")
@@ -289,12 +319,33 @@ def test_study_command_writes_tables_and_figures_from_the_cache(tiny, tmp_path, 
     assert set(pd.read_csv(out / "tables" / "headline.csv").case) == {"dome"}
 
 
+def test_published_findings_are_the_reports_tables_with_its_time_machine_and_peak_memory(tiny, tmp_path):
+    """What `smfem report --full --publish docs/full-report` keeps: the headline, fronts and
+    carried tables as written, and run.json; every run states its peak memory."""
+    import json
+
+    from reports.publish import PUBLISHED, publish
+
+    runs = tiny.tables["runs"]
+    assert (runs.peak_memory_mb > 10).all() and (runs.peak_memory_mb < 24e3).all()
+    made = publish(tiny, tmp_path / "pub", "quick", 2, None)
+    for name in PUBLISHED:
+        assert (tmp_path / "pub" / "tables" / f"{name}.csv").read_bytes() == (tiny.out / "tables" / f"{name}.csv").read_bytes()
+    assert json.loads((tmp_path / "pub" / "run.json").read_text()) == made
+    assert made["command"] == "smfem report --quick --workers 2" and made["machine"]["cpus"] >= 1
+    assert made["peak_memory_mb"] == pytest.approx(runs.peak_memory_mb.max(), abs=0.1)
+    assert made["runs_executed"] == len(tiny.study.executed) and made["wall_time_s"] > 0
+
+
 def test_user_mistakes_in_report_commands_exit_2(tmp_path, capsys):
     assert main(["study", "no_such_case", "--out", str(tmp_path / "s")]) == 2
     assert main(["report", "--workers", "0", "--out", str(tmp_path / "r")]) == 2
     assert main(["report", "--quick", "--full"]) == 2
+    (tmp_path / "a_file").write_text("")
+    assert main(["report", "--out", str(tmp_path / "r"), "--publish", str(tmp_path / "a_file")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 3 and "no_such_case" in err[0] and "--workers" in err[1]
+    assert len(err) == 4 and "no_such_case" in err[0] and "--workers" in err[1]
+    assert err[3].startswith("smfem: error: --publish ") and "not a directory" in err[3]
     assert not (tmp_path / "s").exists() and not (tmp_path / "r").exists()
 
 
