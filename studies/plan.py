@@ -377,7 +377,8 @@ def _full_studies() -> tuple[CaseStudy, ...]:
             _s(SMFEM_QUAD9, *grid("notched_cylinder", ({"harmonics": 80}, {"refine": 2, "harmonics": 80},
                                                        {"refine": 3, "harmonics": 80},
                                                        {"refine": 2, "harmonics": 160}), (1, 2))),
-            _s(REF2D, *grid("notched_cylinder", _r(1), (1, 2, 4, 8)), *grid("notched_cylinder", _r(2), (1, 2, 4, 8))),
+            # the 2D reference with B-bar too (standard: r1 6.5 %, r2 4.3 %; B-bar r1 4.3 %, r2 2.9 %)
+            _s(REF2D, *grid("notched_cylinder", _r(1, 2, 3, 4, 6), (1, 2)), bbar=True),
             # 3D with B-bar elements (the standard 27-node element locks in the plastic flow:
             # against the stored truth at dt r1 8.2, r2 5.2, r3 4.2 % without, r1 5.0, r2 3.4, r3
             # 3.02 % with (193 CPU s); r3 dt / 2 2.70 % (270 s): the 3 %)
