@@ -177,7 +177,8 @@ def effectivity(table, path: Path) -> Path:
             x = [names.index(c) + 0.3 * (k - (len(solvers) - 1) / 2) + 0.07 * (j - 1) for c in rows.case]
             ax.plot(x, rows.effectivity, ls="none", marker=marker, color=entry.color, ms=5, mfc="none",
                     label=f"{entry.label}, {setting}")
-    ax.set_xticks(range(len(names)), names, fontsize=7, rotation=25, ha="right")  # nine scenes' names side by side
+    # upright names: a slanted name's box reaches over its neighbour's (layered_cylinder, layered_cylinder_pulse)
+    ax.set_xticks(range(len(names)), names, fontsize=7, rotation=90)
     ax.set(yscale="log", ylabel="effectivity (estimate / actual error), -", xlim=(-0.6, len(names) - 0.4))
     lo, hi = ax.get_ylim()
     ax.set_ylim(min(lo, 0.1), max(hi, 10))

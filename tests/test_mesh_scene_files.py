@@ -17,7 +17,8 @@ MESH = (EXAMPLES.parent / "cases" / "sections" / "flywheel.msh").resolve()
 def run_scene(tmp_path, text: str, capsys, name: str = "scene") -> tuple[int, str]:
     scene = tmp_path / f"{name}.toml"
     scene.write_text(text)
-    code = main(["run", str(scene), "--quiet", "--no-fields", "--set", "t_end=2e-5", "--out", str(tmp_path / name)])
+    code = main(["run", str(scene), "--quiet", "--no-fields", "--estimate", "off", "--set", "t_end=2e-5", "--out",
+                 str(tmp_path / name)])
     return code, capsys.readouterr().err
 
 

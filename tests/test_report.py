@@ -262,6 +262,9 @@ def test_study_on_a_dask_local_cluster_matches_the_local_processes_and_carries_a
     assert runs.carried[SMFEM].startswith(f"{until.describe()}: reached") and " at r2 H1 " in runs.carried[SMFEM]
     np.testing.assert_allclose(runs.series[SMFEM][1].history.to_numpy(), local["r2 H1"].history.to_numpy(),
                                rtol=1e-12, atol=1e-15)
+    # resumed from its cache, the ladder climbs its cached runs at once and runs nothing
+    again = build(plan, tmp_path / "again", cache=tmp_path / "runs", progress=False, document=False)
+    assert again.study.executed == [] and again.analyses[0].runs.carried == runs.carried
 
 
 @pytest.mark.skipif(chromium() is None, reason="no Chromium on this machine (Debian package 'chromium')")

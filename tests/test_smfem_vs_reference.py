@@ -90,11 +90,14 @@ def test_plastic_notched_displacements_within_five_percent(name, smfem_sets, ref
 
 def test_plastic_strip_without_the_notch_agrees_to_its_plastic_strains():
     """The control for the notched strip: without the notch SMFEM and the reference agree on
-    the plastic strains too (measured: mid_uz 0.3 %, peaks peps_notch +2.2 %, peps_top -0.4 %
-    at 40 harmonics), so the notched scene's 28-42 % gap comes from the notch itself: absent
-    material along x3, truncated at finitely many harmonics, against the real sharp notch."""
-    s = smfem(get_case("notched_strip", {"notch_depth": 0.0, "harmonics": 40}), with_fields=False)
-    r = reference(get_case("notched_strip", {"notch_depth": 0.0}))
+    the plastic strains too, so the notched scene's 28-42 % gap comes from the notch itself:
+    absent material along x3, truncated at finitely many harmonics, against the real sharp notch.
+    Over the first 60 of its 100 steps (plastic strains to 0.7 %; the reference's 10 CPU s of the
+    whole's 19) measured at 40 harmonics: mid_uz 0.14 %, peaks peps_notch +1.5 %, peps_top
+    +1.3 % (over the whole window 0.29 %, +2.4 %, -1.2 %)."""
+    window = {"notch_depth": 0.0, "t_end": 1.92e-4}
+    s = smfem(get_case("notched_strip", {**window, "harmonics": 40}), with_fields=False)
+    r = reference(get_case("notched_strip", window))
     assert s.converged and r.converged
     for probe, h in s.history.items():
         measure, value = probe_error(probe, s.t, h, r.t, r.history[probe])

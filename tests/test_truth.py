@@ -219,6 +219,8 @@ def test_thick_cylinder_truth_against_an_independent_spectral_solution(tmp_path)
         assert gap < truth.uncertainty[probe], (probe, gap, truth.uncertainty)  # the uncertainty covers it
 
 
+@pytest.mark.slow  # 17 s: the default tests keep under their 5 minutes; the ring's modal truth against its
+# spectral solution (above) and the strip's harmonic model against the 2D reference run by default
 def test_unnotched_strip_truth_against_an_independent_spectral_solution(tmp_path):
     base = {"plastic": False, "notch_depth": 0.0}
     plan = plan_for("notched_strip", base)
