@@ -18,7 +18,7 @@ from runs.registry import lookup
 from studies.metrics import TARGETS, TRUTH_TOO_COARSE
 from studies.plan import SMFEM
 
-_SPEEDUP = re.compile(r"^([<>]?)\s*([0-9.]+)x$")
+_SPEEDUP = re.compile(r"^([<>]?)\s*([0-9.]+(?:e[+-]?[0-9]+)?)x$")  # 1.05e+03x: a thousand times and more
 _COST = re.compile(r"^([0-9.e+-]+) \((.*)\)$")
 
 
@@ -35,9 +35,14 @@ def _comparison(solver: str, speedup: str) -> str | None:
     name = lookup(solver).prose
     if x >= 1:
         more = {"<": "at most ", ">": "more than "}.get(bound, "")
-        return f"{more}{x:.3g} times faster than {name}"
+        return f"{more}{_times(x)} times faster than {name}"
     less = {"<": "more than ", ">": "at most "}.get(bound, "")
-    return f"{name} {less}{1 / x:.3g} times faster"
+    return f"{name} {less}{_times(1 / x)} times faster"
+
+
+def _times(x: float) -> str:
+    """Three significant digits, a thousand and more without an exponent (1050, not 1.05e+03)."""
+    return f"{x:.3g}" if x < 1000 else f"{float(f'{x:.3g}'):.0f}"
 
 
 def _pct_text(error_pct: float) -> str:

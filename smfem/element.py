@@ -60,6 +60,12 @@ def gauss_interpolation(xi: float, eta: float) -> np.ndarray:
     return (1 + GAUSS_XI * xi / GAUSS_A**2) * (1 + GAUSS_ETA * eta / GAUSS_A**2) / 4
 
 
+def mean_basis() -> np.ndarray:
+    """(4, 1) the B-bar projection's functions at the Gauss points: constants, the element mean
+    (:mod:`smfem.bbar`)."""
+    return np.ones((len(GAUSS_XI), 1))
+
+
 def at_gauss_points(parts) -> np.ndarray:
     """The moment-scheme strain operator ``B0 + xi B1 + eta B2`` (each (ne, 6, 12)) at the four
     Gauss points: (ne, 4, 6, 12)."""

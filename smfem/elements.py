@@ -78,6 +78,8 @@ class Element:
         sample points to a local point (the plastic strain probes)
     mesh_order : the section mesh it needs (:func:`cases.section_mesh.section_mesh`): 1, the 4 corners;
         2, the 9 nodes of the mesh refined once in (s, t)
+    bbar_basis : ``() -> (ng, n_p)`` the functions, at the sample points, onto which B-bar
+        projects the volumetric strain (:mod:`smfem.bbar`); None: the element has no B-bar
     """
 
     name: str
@@ -86,6 +88,7 @@ class Element:
     operators: Callable[..., Operators]
     sample_interpolation: Callable
     mesh_order: int = 1
+    bbar_basis: Callable | None = None
 
     @property
     def dofs(self) -> int:
@@ -93,7 +96,8 @@ class Element:
 
 
 #: the moment-scheme quadrilateral of the paper (:mod:`smfem.element`), the default
-MOMENT4 = Element("moment4", 4, element.shape_functions, element.operators, element.gauss_interpolation)
+MOMENT4 = Element("moment4", 4, element.shape_functions, element.operators, element.gauss_interpolation,
+                  bbar_basis=element.mean_basis)
 
 def _held_gradients(X, body, nu):
     return replace(element.operators(X, body, nu), free_ratio=0.0)
@@ -102,10 +106,11 @@ def _held_gradients(X, body, nu):
 #: the moment scheme with the free normal strain gradients held at zero: the element before the
 #: fix in :mod:`smfem.element`, which locks as nu -> 1/2 (the stability study's comparison row)
 MOMENT4_HELD = Element("moment4-held-gradients", 4, element.shape_functions, _held_gradients,
-                       element.gauss_interpolation)
+                       element.gauss_interpolation, bbar_basis=element.mean_basis)
 
 #: the 9-node Lagrange quadrilateral, fully integrated (:mod:`smfem.quad9`)
-QUAD9 = Element("quad9", 9, quad9.shape_functions, quad9.operators, quad9.gauss_interpolation, mesh_order=2)
+QUAD9 = Element("quad9", 9, quad9.shape_functions, quad9.operators, quad9.gauss_interpolation, mesh_order=2,
+                bbar_basis=quad9.linear_basis)
 
 #: every element by name
 ELEMENTS: dict[str, Element] = {e.name: e for e in (MOMENT4, MOMENT4_HELD, QUAD9)}

@@ -19,7 +19,7 @@ import scipy.sparse as sp
 from cases.geometry import RING
 from cases.params import UnsupportedCase
 
-from . import assembly, constraints, elements, fourier, inhomogeneity, laws, loads, symmetry
+from . import assembly, bbar as projected, constraints, elements, fourier, inhomogeneity, laws, loads, symmetry
 from cases.section_mesh import SectionMesh, section_mesh
 
 
@@ -54,13 +54,15 @@ class Model:
     nonlinear : keep every mode the symmetry of the problem allows (plasticity couples them) and
         set up the x3 sample points for stresses
     element : the section element, a name in :data:`smfem.elements.ELEMENTS`
+    bbar : the element's volumetric strain replaced by its projection per element (B-bar,
+        :mod:`smfem.bbar`)
 
     The off-diagonal stiffness blocks are assembled only on request
     (:meth:`coupled_stiffness`): a direct solve needs them, the block-iterative solver
     takes the coupling from the stresses instead.
     """
 
-    def __init__(self, case, nonlinear: bool = False, element: str | None = None):
+    def __init__(self, case, nonlinear: bool = False, element: str | None = None, bbar: bool = False):
         self.case = case
         self.body = case.body
         self.length = case.length
@@ -85,6 +87,8 @@ class Model:
             self.rho = np.array([m.rho for m in case.materials])[self.material_index]
             nu = np.array([m.nu for m in case.materials])[self.material_index][:, None]
         self.ops: elements.Operators = self.element.operators(self.mesh.element_x(), case.body, nu)
+        if bbar:
+            self.ops = projected.operators(self.element, self.ops)
         self.inhomogeneous = (bool(case.cutouts) and case.contrast < 1.0) or bool(case.variation)
         n_harm = case.harmonics
         families = ("c", "s") if case.body == RING else ("p",)

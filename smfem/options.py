@@ -29,6 +29,7 @@ SPECS = {
     "x3_min_points": Spec(int, 0, 100_000, help="fewest stress points along x3 (0: no floor)"),
     "layer_points_per_harmonic": Spec(int, 1, 1000, help="contact-layer points per harmonic"),
     "max_state_iterations": Spec(int, 1, 100_000, help="contact-layer state iterations allowed per step"),
+    "bbar": Spec(bool, help="the section element's volumetric strain projected per element (B-bar)"),
 }
 
 
@@ -63,6 +64,10 @@ class SolverOptions:
         (2 integrate the products of harmonics exactly; the edge of a contact zone needs more,
         benchmarks/README.md)
     max_state_iterations : contact-layer state iterations allowed per step
+    bbar : the section element's volumetric strain of each harmonic replaced by its projection
+        per element (B-bar, :mod:`smfem.bbar`: the element mean on the moment-scheme
+        quadrilateral, ``{1, xi, eta}`` on the 9-node one), in the stiffness and at the stress
+        sample points alike; against volumetric locking in plastic flow
     """
 
     iteration_matrix: str = "auto"
@@ -74,6 +79,7 @@ class SolverOptions:
     x3_min_points: int = 0
     layer_points_per_harmonic: int = 8
     max_state_iterations: int = 60
+    bbar: bool = False
 
     def __post_init__(self):
         """Every field checked by its :data:`SPECS` (a :class:`cases.ParameterError`, one line)

@@ -67,6 +67,12 @@ def gauss_interpolation(xi: float, eta: float) -> np.ndarray:
     return np.outer(through_points(xi), through_points(eta)).ravel()
 
 
+def linear_basis() -> np.ndarray:
+    """(9, 3) the B-bar projection's functions ``1, xi, eta`` at the Gauss points (the Q9/P3
+    pressure space; :mod:`smfem.bbar` says why not constants)."""
+    return np.column_stack([np.ones_like(GAUSS_XI), GAUSS_XI, GAUSS_ETA])
+
+
 @dataclass(frozen=True, eq=False)
 class Quad9Operators:
     """The operators of :mod:`smfem.elements` for nodal coordinates ``X`` (ne, 9, 2)."""

@@ -102,9 +102,9 @@ def build_system(case, options: SolverOptions):
         if plastic:
             raise ModelError(f"{case.name}: contact with plasticity is not supported: set plastic=false")
         # harmonic 0 alone for an axisymmetric scene, else every mode the wall's symmetry allows
-        model = Model(case, nonlinear=not case.axisymmetric)
+        model = Model(case, nonlinear=not case.axisymmetric, bbar=options.bbar)
         return model, ContactSystem(model, case.dt, options, force_terms(case, model)), ContactSystem.HOW
-    model = Model(case, nonlinear=plastic)
+    model = Model(case, nonlinear=plastic, bbar=options.bbar)
     coupled = bool(model.coupling)
     kind = options.iteration_matrix
     low_rank = coupled and woodbury.preferred(model)
@@ -118,7 +118,7 @@ def build_system(case, options: SolverOptions):
                else "decoupled harmonics, one block-diagonal factorization")
         return model, LinearSystem(K, M, Q, case.dt, force_terms(case, model)), how
     if not plastic:  # elastic but not to be factorized whole: the iterations
-        model = Model(case, nonlinear=True)
+        model = Model(case, nonlinear=True, bbar=options.bbar)
     n = len(model.systems)
     how = {"coupled": (f"additional loads (13)-(16), the whole coupled elastic system of {n} harmonics as iteration "
                        "matrix" + (" (block-diagonal plus the cut-outs' low-rank correction, Woodbury)" if low_rank else "")
@@ -144,7 +144,7 @@ def gauss_system(case, options: SolverOptions, plastic: bool):
     if refused:
         raise ModelError(f"{case.name}: time_scheme=gauss takes an elastic run without contact, not {refused}: "
                          "set time_scheme=newmark")
-    model = Model(case)
+    model = Model(case, bbar=options.bbar)
     if model.coupling and model.coupled_nonzeros() > options.direct_max_nonzeros:
         raise ModelError(f"{case.name}: time_scheme=gauss factorizes the coupled system whole, and its "
                          f"{model.coupled_nonzeros()} nonzeros exceed direct_max_nonzeros: set time_scheme=newmark")

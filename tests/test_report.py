@@ -526,6 +526,10 @@ def test_verdict_sentences_say_who_is_faster_and_why_no_claim():
                 (REF2D, "0.267 (r2)", "0.0559 (r1)", "1.83x", "1.46x", 0.36, 0.04))
     assert sentence("dome", both) == ("dome: SMFEM with the quadratic element reaches 1 % total error in 0.146 s CPU "
                                       "(r2 H1 quad9): 1.83 times faster than the 2D reference.")
+    # a thousand times and more is written 1.05e+03x (the full report's dome against 3D)
+    far = rows((SMFEM, "0.149 (r2 H1)", "0.025 (r1 H1)", "", "", 0.8, 0.04),
+               (REF3D, "157 (r2 dt2.5e-06)", "121 (r2)", "1.05e+03x", "> 4.85e+03x", 0.98, 0.04))
+    assert sentence("dome", far).endswith(": 1050 times faster than the 3D reference.")
     from cli.study import headline_lines
 
     lines = headline_lines(both.reset_index().assign(case="dome"))
