@@ -10,7 +10,7 @@ is there only once every run has finished, so such a series runs all its levels.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from cases import get_case
 from runs.registry import lookup, with_fixed
@@ -44,7 +44,6 @@ class Ladder:
     asked: int = 1
     #: why the ladder stopped: '' while it runs; a sentence once it has
     outcome: str = ""
-    errors: dict = field(default_factory=dict)
 
     @classmethod
     def make(cls, series: Series, name: str, base: dict, truth, job) -> Ladder:
@@ -72,7 +71,6 @@ class Ladder:
         until = self.series.until
         error = (metrics.headline_error(self.case, self.truth, run.history["t"].to_numpy(), run.history)
                  if run.usable else math.nan)
-        self.errors[run.label] = error
         cpu = run.summary.get("cpu_time_s", math.nan) if run.summary else math.nan
         if error <= until.target:
             self.outcome = f"reached {100 * until.target:g} % at {run.label} ({100 * error:.3g} %, {cpu:.3g} CPU s)"
