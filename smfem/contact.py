@@ -509,12 +509,13 @@ class ContactSystem:
                 row[self.offsets[i]:self.offsets[i + 1]] = (s.T.T @ axial) / axial.sum()
         return row
 
-    def _solve(self, states: LayerStates, y: np.ndarray) -> np.ndarray:
-        """Solution with the layer in ``states``, given ``y = A0^-1 b`` of the step's load ``b``.
+    def _solve(self, states: LayerStates, y: np.ndarray, offset: bool = True) -> np.ndarray:
+        """Solution with the layer in ``states``, given ``y = A0^-1 b`` of the step's load ``b``
+        (``offset``: with the layer's offset forces, else the matrix's inverse alone).
 
         The layer's offset forces act on the face dofs only, ``C' f``, so their response is
         ``Z f``: no back-substitution per iteration, one per mode and step."""
-        f = self.layer.offset_force(states)
+        f = self.layer.offset_force(states) if offset else np.zeros((len(self.Z), len(self.layer.F)))
         if (states.kind != OPEN).any():
             key = states.key()
             k = self.face_blocks.get(key)
@@ -529,6 +530,17 @@ class ContactSystem:
                 raise ContactError("the contact layer's face system is singular (the layer against the body "
                                    "at this step: a far stiffer layer or a far longer step)") from None
         return y - np.concatenate([Z @ fi for Z, fi in zip(self.Z, f)])
+
+    def static_residual(self, u: np.ndarray, states: LayerStates, t: float) -> np.ndarray:
+        """``Q(t) - K u`` less the layer's nodal forces in ``states`` (its tangent and offsets,
+        the step's linear system): the out-of-balance force of a static solution ``u``."""
+        f = self.layer.face_force(self.layer.stress(self.layer.strain(u), states))
+        return self.load(t) - self.stiffness_product(u) - np.concatenate([C.T @ fi for C, fi in zip(self.layer.C, f)])
+
+    def correction(self, states: LayerStates, r: np.ndarray) -> np.ndarray:
+        """``(K + a0 M + C' k C)^-1 r``, the step's matrix with the layer's tangent in ``states``."""
+        base = np.concatenate([lu.solve(ri) for lu, ri in zip(self.lus, self.blocks(r))])
+        return self._solve(states, base, offset=False)
 
     def initial_acceleration(self, u: np.ndarray) -> np.ndarray:
         """``M a = Q - K u``; the massless face nodes carry no initial acceleration."""
