@@ -3,7 +3,7 @@
     python benchmarks/calculix.py [--tiny] [CASE ...]
 
 Each case at its defaults (2D, refine 1, the case's dt and window): per probe the difference
-of each pair of solvers (``runs.errors.probe_error``: relative max-norm; relative peak
+of each pair of solvers (``smfem.runs.errors.probe_error``: relative max-norm; relative peak
 difference for plastic strains, where CalculiX reports PEEQ), and each solver's CPU time.
 These are same-dt (spatial and formulation) differences, not errors against a truth: the
 report's tables give those. Needs ``ccx`` on PATH.
@@ -15,8 +15,8 @@ import argparse
 
 from cases import CASES, get_case
 from cases.params import ToolMissing
-from runs.errors import probe_error
-from runs.registry import CALCULIX, REFERENCE, SMFEM, solve
+from smfem.runs.errors import probe_error
+from smfem.runs.registry import CALCULIX, REFERENCE, SMFEM, solve
 
 PAIRS = ((CALCULIX, REFERENCE), (CALCULIX, SMFEM), (SMFEM, REFERENCE))
 
@@ -52,7 +52,7 @@ def main(argv=None) -> None:
 
 
 if __name__ == "__main__":
-    from runs import threads
+    from smfem.runs import threads
 
     threads.pin()  # one BLAS thread, as in smfem's own entry points
     main()

@@ -7,8 +7,8 @@ elements on 2-node face segments) and quad9 (6-node layer elements, quadratic al
 Per run: size, CPU, state iterations per step (mean / max), the steps in contact with part of
 the face open (inside the contact window) and the reversals of the closed share (chatter),
 the energy change; the headline error (displacement and velocity probes, relative max-norm
-through the 2R/c window) and the stress probes' against the stored truth (``truths/rod_impact``,
-:func:`studies.stored.find`) and against the reference 2D at refine 2 (same dt).
+through the 2R/c window) and the stress probes' against the stored truth (``smfem/truths/rod_impact``,
+:func:`smfem.studies.stored.find`) and against the reference 2D at refine 2 (same dt).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 
 from cases import get_case
 from reference_fem import solve as reference
-from runs.errors import history_errors
+from smfem.runs.errors import history_errors
 from smfem.solver import solve as smfem
 
 #: (solver, element, refine); the reference runs in the case's dim, 2 (axisymmetric) here
@@ -57,8 +57,8 @@ def rod(args):
     sets = {"t_end": 5e-6} if args.tiny else {}
     truth, why = None, "not looked up (--tiny)"
     if not args.tiny:
-        from studies.stored import find
-        from studies.truth import plan_for
+        from smfem.studies.stored import find
+        from smfem.studies.truth import plan_for
 
         truth, why = find("rod_impact", get_case("rod_impact"), plan_for("rod_impact", {}, "full"))
     if truth is None:
@@ -110,7 +110,7 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    from runs import threads
+    from smfem.runs import threads
 
     threads.pin()  # one BLAS thread, as in smfem's own entry points
     main()

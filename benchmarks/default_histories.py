@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from cases import CASES, get_case
-from runs import threads
-from runs.registry import REFERENCE, SMFEM, solve
+from smfem.runs import threads
+from smfem.runs.registry import REFERENCE, SMFEM, solve
 
 SOLVERS = (SMFEM, REFERENCE)
 #: the reference's settings where its default is past a direct solver: the flywheel's 3D model

@@ -1,8 +1,8 @@
 """How honest is a run's error estimate? Effectivity = estimate / actual error, per probe.
 
 For each scene and solver (SMFEM, the 2D reference) at the scene's defaults and two other
-settings (refine 2; half the step), the run's estimate (runs.estimate) against its actual
-error from the stored truth (truths/CASE), on the displacement and velocity probes whose
+settings (refine 2; half the step), the run's estimate (smfem.runs.estimate) against its actual
+error from the stored truth (smfem/truths/CASE), on the displacement and velocity probes whose
 truth is fine enough (actual error above three times the truth's uncertainty).
 
     python benchmarks/estimate_effectivity.py [--cases dome thick_cylinder ...] [--out FILE.csv]
@@ -22,11 +22,11 @@ import pandas as pd
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from cases import CASES, get_case  # noqa: E402
-from studies.effectivity import judged, settings, summary  # noqa: E402
-from studies.stored import directory, read  # noqa: E402
-from runs import threads  # noqa: E402
-from runs.estimate import estimate  # noqa: E402
-from runs.registry import REF2D, SMFEM, solve  # noqa: E402
+from smfem.studies.effectivity import judged, settings, summary  # noqa: E402
+from smfem.studies.stored import directory, read  # noqa: E402
+from smfem.runs import threads  # noqa: E402
+from smfem.runs.estimate import estimate  # noqa: E402
+from smfem.runs.registry import REF2D, SMFEM, solve  # noqa: E402
 
 
 def settings_of(name: str, tiny: bool = False) -> dict[str, dict]:

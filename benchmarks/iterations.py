@@ -67,7 +67,7 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    from runs import threads
+    from smfem.runs import threads
 
     threads.pin()  # one BLAS thread, as in smfem's own entry points
     main()

@@ -4,7 +4,7 @@
 
 ``moving_load`` at refine 1 over harmonics 20 ... 120 and dt 4e-6 ... 1e-6 (the scene's 2e-6
 in the middle): per setting the largest relative max-norm error of ``mid_uz`` and ``q_uz``
-against ``truths/moving_load`` (interpolated onto the run's times), and the CPU time. The
+against ``smfem/truths/moving_load`` (interpolated onto the run's times), and the CPU time. The
 scene's defaults (dt = 2e-6 s, 60 harmonics) come from this table. ``--tiny``: two settings
 against the quick modal truth of a short window (the tests run every benchmark so).
 """
@@ -16,8 +16,8 @@ import argparse
 import numpy as np
 
 from cases import get_case
-from runs.registry import MODAL, SMFEM, solve
-from runs.threads import pin
+from smfem.runs.registry import MODAL, SMFEM, solve
+from smfem.runs.threads import pin
 
 NAME = "moving_load"
 
@@ -28,7 +28,7 @@ def truth_histories(tiny: bool):
     if tiny:
         run = solve(MODAL, get_case(NAME, {"t_end": 1e-4, "harmonics": 120}))
         return run.t, run.history
-    from studies import stored
+    from smfem.studies import stored
 
     truth = stored.read(stored.directory(NAME))
     return truth.t, truth.values

@@ -19,11 +19,11 @@ from pathlib import Path
 import numpy as np
 
 from cases import get_case
-from studies.cache import RunCache
-from studies.jobs import Job
-from studies.plan import REF2D
-from studies.study import run_cached
-from studies.truth import order_of
+from smfem.studies.cache import RunCache
+from smfem.studies.jobs import Job
+from smfem.studies.plan import REF2D
+from smfem.studies.study import run_cached
+from smfem.studies.truth import order_of
 
 CASES = ("notched_cylinder", "notched_strip")
 
@@ -72,7 +72,7 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    from runs import threads
+    from smfem.runs import threads
 
     threads.pin()  # one BLAS thread, as in smfem's own entry points
     main()

@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from cases import get_case, parse_sets
-from runs.errors import probe_error
+from smfem.runs.errors import probe_error
 from smfem.solver import solve
 
 
@@ -78,7 +78,7 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    from runs import threads
+    from smfem.runs import threads
 
     threads.pin()  # one BLAS thread, as in smfem's own entry points
     main()

@@ -5,7 +5,7 @@ notched cylinder), their CPU time and memory.
 
 Each run: the 3D reference (one BLAS thread, ``linear_solver=auto``) at the scene's window, its
 headline error (the largest relative max-norm error over the displacement and velocity probes,
-through the scene's comparison window) against ``truths/SCENE``, its CPU time, the process's
+through the scene's comparison window) against ``smfem/truths/SCENE``, its CPU time, the process's
 peak memory so far, and the CG iterations on Newton tangents.
 """
 
@@ -14,14 +14,14 @@ from __future__ import annotations
 import argparse
 import resource
 
-from runs.threads import pin
+from smfem.runs.threads import pin
 
 pin()
 
 from cases import get_case  # noqa: E402
-from runs.errors import history_errors  # noqa: E402
-from runs.registry import solve  # noqa: E402
-from studies import stored  # noqa: E402
+from smfem.runs.errors import history_errors  # noqa: E402
+from smfem.runs.registry import solve  # noqa: E402
+from smfem.studies import stored  # noqa: E402
 
 #: measured 2026-11-26 (benchmarks/README.md): the cheapest run of each scene within its target
 RUNS = ("dome:2:2", "thick_cylinder:3:16", "notched_strip:2:2", "rod_impact:1:2", "notched_cylinder:3:2:bbar")

@@ -13,14 +13,14 @@ from __future__ import annotations
 import argparse
 import resource
 
-from runs.threads import pin
+from smfem.runs.threads import pin
 
 pin()
 
 import numpy as np  # noqa: E402
 
 from cases import get_case  # noqa: E402
-from runs.registry import solve  # noqa: E402
+from smfem.runs.registry import solve  # noqa: E402
 
 RUNS = ("notched_strip:3:1", "notched_cylinder:3:1", "notched_cylinder:3:2", "notched_strip:3:2")
 

@@ -17,7 +17,7 @@ import time
 
 from cases import get_case
 from reference_fem import solve as reference
-from studies.metrics import history_errors
+from smfem.studies.metrics import history_errors
 from smfem.solver import solve
 
 SLOPE = 0.01
@@ -63,7 +63,7 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    from runs import threads
+    from smfem.runs import threads
 
     threads.pin()  # one BLAS thread, as in smfem's own entry points
     main()

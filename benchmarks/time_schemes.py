@@ -6,10 +6,10 @@
 Per scene and spatial level (SMFEM's front levels, moment4, and the quadratic element's, quad9)
 at dt = the case's dt over each divisor: the total error against the stored truth (the quick
 report's headline measure: the largest relative max-norm error over the displacement and
-velocity probes, ``runs.errors.history_errors``) and the CPU time (best of ``--repeat``, one
+velocity probes, ``smfem.runs.errors.history_errors``) and the CPU time (best of ``--repeat``, one
 BLAS thread) of
 
-plain        SMFEM as it is: Newmark average acceleration, the trapezoidal rule (runs.registry);
+plain        SMFEM as it is: Newmark average acceleration, the trapezoidal rule (smfem.runs.registry);
 richardson   the plain runs at dt and dt/2 combined at dt's steps, u_dt/2 + (u_dt/2 - u_dt) / 3;
              CPU: both runs;
 bathe        Bathe's composite scheme (a trapezoidal half step, then the three-point backward
@@ -29,7 +29,7 @@ step is a scalar recurrence per mode; Newmark's, run so, reproduces SMFEM's run 
 ``modal check`` line). Against ``exact`` each run's time error alone is measured too, with its
 observed order between halvings (the trapezoidal rule's is 2 only once the step resolves the
 modes the step load excites; Richardson's premise). Then, per scheme, over the moment4 levels and
-over all, the CPU time to reach 1 % and 5 % along the front (studies.metrics: ``pareto_front``,
+over all, the CPU time to reach 1 % and 5 % along the front (smfem.studies.metrics: ``pareto_front``,
 ``cost_to``).
 
 Elastic scenes homogeneous along x3 with a held load and no initial velocity only (the modal
@@ -49,16 +49,16 @@ import scipy.sparse.linalg as sla
 
 from cases import get_case
 from reports.analysis import family_of
-from runs import threads
-from runs.errors import history_errors
-from runs.registry import SMFEM, solve
+from smfem.runs import threads
+from smfem.runs.errors import history_errors
+from smfem.runs.registry import SMFEM, solve
 from smfem.model import Model
 from smfem.probes import ProbeSet
 from smfem.solver import stacked
-from studies import metrics
-from studies.plan import quick, select
-from studies.stored import directory, read
-from studies.study import stored_truth
+from smfem.studies import metrics
+from smfem.studies.plan import quick, select
+from smfem.studies.stored import directory, read
+from smfem.studies.study import stored_truth
 
 #: spatial levels per scene: SMFEM's front in the quick report (moment4), then quad9's
 LEVELS = {

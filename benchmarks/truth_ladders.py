@@ -8,7 +8,7 @@ the standard one on meshes graded toward the cut-outs' corners with exponent 2) 
 the explicit truth over r2, r4, r8 with the r3, r6 pair (graded: r1, r2 only, its steps are
 many times shorter) and prints per probe the observed order, the size of Richardson's
 correction and the truth's uncertainty; then the distance between the variants' truths and
-from each to the stored truth (``truths/CASE``); and the time error of central differences at half the
+from each to the stored truth (``smfem/truths/CASE``); and the time error of central differences at half the
 critical step on r2 (the same mesh at a quarter of it). It shares the run cache of
 ``smfem truth --full`` (``out/truth-runs``): runs made by the same code are reused, so right
 after the stored truths only the graded runs and the time check are new (about 25 CPU
@@ -21,13 +21,13 @@ import argparse
 from pathlib import Path
 
 from cases import get_case
-from studies.cache import RunCache
-from studies.jobs import Job
-from studies.stored import directory, read
-from studies.plan import EXPLICIT, EXPLICIT_TRUTH, TruthPlan, explicit_truth
-from studies.study import run_cached
-from studies.truth import assemble, jobs
-from runs.errors import history_errors
+from smfem.studies.cache import RunCache
+from smfem.studies.jobs import Job
+from smfem.studies.stored import directory, read
+from smfem.studies.plan import EXPLICIT, EXPLICIT_TRUTH, TruthPlan, explicit_truth
+from smfem.studies.study import run_cached
+from smfem.studies.truth import assemble, jobs
+from smfem.runs.errors import history_errors
 
 VARIANTS = {"standard": {}, "bbar": {"bbar": True}, "graded": {"grading": 2.0}}
 
@@ -90,7 +90,7 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    from runs import threads
+    from smfem.runs import threads
 
     threads.pin()  # one BLAS thread, as in smfem's own entry points
     main()

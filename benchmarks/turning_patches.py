@@ -16,9 +16,9 @@ import argparse
 from pathlib import Path
 
 from cases import get_case
-from runs.errors import probe_error
-from runs.threads import pin
-from runs.registry import REFERENCE, SMFEM, solve
+from smfem.runs.errors import probe_error
+from smfem.runs.threads import pin
+from smfem.runs.registry import REFERENCE, SMFEM, solve
 
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "turning_patches.toml"
 

@@ -6,11 +6,11 @@
 Per scene, SMFEM (the moment-scheme element) on the built-in mapped section and on the same
 scene with its section from gmsh (``examples/NAME_unstructured.toml``: cases/sections/NAME.msh,
 unstructured quadrilaterals), at ``refine`` levels and dt = the case's dt over each divisor:
-the total error against the scene's stored truth (truths/NAME, made on the mapped scene: the
+the total error against the scene's stored truth (smfem/truths/NAME, made on the mapped scene: the
 same body, so it judges both) as the quick report measures it (the largest relative max-norm
 error over the displacement and velocity probes, the scene's comparison window) and the CPU
 time (best of two, one BLAS thread). Then, per section, the least CPU that reaches 1 % and 5 %
-along its work-precision front (studies.metrics), and the ratio unstructured / mapped.
+along its work-precision front (smfem.studies.metrics), and the ratio unstructured / mapped.
 """
 
 from __future__ import annotations
@@ -22,11 +22,11 @@ from pathlib import Path
 
 from cases import get_case
 from reports.analysis import family_of
-from runs import threads
-from runs.errors import history_errors
-from runs.registry import SMFEM, solve
-from studies import metrics
-from studies.stored import directory, read
+from smfem.runs import threads
+from smfem.runs.errors import history_errors
+from smfem.runs.registry import SMFEM, solve
+from smfem.studies import metrics
+from smfem.studies.stored import directory, read
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

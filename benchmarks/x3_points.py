@@ -20,7 +20,7 @@ import pandas as pd
 
 from cases import get_case
 from cases.x3_points import AREA_TOLERANCE, TABLE
-from runs.zones import plastic_area
+from smfem.runs.zones import plastic_area
 from smfem.options import SolverOptions
 from smfem.solver import solve
 
@@ -86,7 +86,7 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    from runs import threads
+    from smfem.runs import threads
 
     threads.pin()  # one BLAS thread, as in smfem's own entry points
     main()

@@ -123,7 +123,7 @@ COMMON = {
     "t_end": Spec(float, 1e-12, 1e6, help="end of the time window, s"),
     "refine": Spec(int, 1, 64, help="multiplies the paper mesh's element counts"),
     "harmonics": Spec(int, 1, 2000, help="number of Fourier terms kept"),
-    # the space companion of an error estimate at refine 1 (runs.estimate): halves the paper mesh
+    # the space companion of an error estimate at refine 1 (smfem.runs.estimate): halves the paper mesh
     "coarsen": Spec(int, 1, 16, help="divides the mesh's element counts (each segment keeps at least one element)"),
     "E": Spec(float, MIN_MODULUS, MAX_STRESS, help="Young's modulus"),
     # nu -> 1/2 or -1 leaves double precision: lambda / mu = 2 nu / (1 - 2 nu) is 5e4 at the bound

@@ -12,7 +12,7 @@ striker's wave has been to its free end and back (2 L1 / c); then the striker re
 part and the target carries a compressive pulse 2 L1 long, which its free end reflects as
 tension. With nu = 0.3 the pulse rings behind its front (the radial inertia): histories compare
 through the window 2R/c (``references['comparison_window_s']``), as the rod's, where it fits
-whole (:func:`runs.errors.inside_window`: at the record's last sample a one-sided window let the
+whole (:func:`smfem.runs.errors.inside_window`: at the record's last sample a one-sided window let the
 mesh-scale ringing through, and target_mid_szz looked divergent over the explicit ladder).
 """
 

@@ -1,5 +1,5 @@
 """The reference's own numerical checks, for the stability study (reached through the solver
-table, ``runs.registry.checks('reference')``): the static solution's probes."""
+table, ``smfem.runs.registry.checks('reference')``): the static solution's probes."""
 
 from __future__ import annotations
 

@@ -103,7 +103,7 @@ class WallContact:
         H = rows.H
         # in blocks of rows: SuperLU's multi-column solve is twice as fast as one row at a time
         # (ring_in_ring in 3D, 1152 rows: 6.5 s against 13); its BLAS runs on the one thread
-        # every entry point pins (runs.threads), for threaded BLAS stalls on a busy machine
+        # every entry point pins (smfem.runs.threads), for threaded BLAS stalls on a busy machine
         self.W = np.column_stack([lu.solve(H[k:k + ROW_BLOCK].T.toarray()) for k in range(0, H.shape[0], ROW_BLOCK)]) \
             if H.shape[0] else np.zeros((H.shape[1], 0))
         S = H @ self.W

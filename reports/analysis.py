@@ -13,13 +13,13 @@ import pandas as pd
 
 from cases import get_case
 
-from runs.registry import SMFEM, lookup
+from smfem.runs.registry import SMFEM, lookup
 
-from studies import effectivity, metrics
-from studies.jobs import NOT_AVAILABLE, OK
-from studies.plan import series_solvers
+from smfem.studies import effectivity, metrics
+from smfem.studies.jobs import NOT_AVAILABLE, OK
+from smfem.studies.plan import series_solvers
 from .references import best_history, published_points
-from studies.study import CaseRuns
+from smfem.studies.study import CaseRuns
 
 #: probes whose errors make the headline measure: displacements and velocities. Stresses
 #: (wave fronts, the rod's impact) and plastic strains (a local threshold quantity, zero until a
@@ -46,7 +46,7 @@ class SolverSummary:
     truth), ``spatial`` (against the same-dt reference, runs at the case's dt only) and, per
     other family (:data:`FAMILIES`), its measure against the truth; ``front``: labels on the
     total-error work-precision front, cheapest first; ``costs``: target ->
-    :class:`studies.metrics.Cost`; ``family_costs``: family -> target -> Cost.
+    :class:`smfem.studies.metrics.Cost`; ``family_costs``: family -> target -> Cost.
     """
 
     solver: str
@@ -68,7 +68,7 @@ class CaseAnalysis:
     solvers: dict
     orders: pd.DataFrame
     published: pd.DataFrame
-    #: the error estimates against the truth (:mod:`studies.effectivity`)
+    #: the error estimates against the truth (:mod:`smfem.studies.effectivity`)
     effectivity: pd.DataFrame = field(default_factory=pd.DataFrame)
 
     @property
@@ -86,7 +86,7 @@ class CaseAnalysis:
 
     def smfem_costs(self, family: str = "headline") -> dict | None:
         """Per target, SMFEM's cost with its best element there (the cheapest of the SMFEM
-        family's series, :func:`studies.metrics.cheapest`): what the other solvers' speed-ups
+        family's series, :func:`smfem.studies.metrics.cheapest`): what the other solvers' speed-ups
         are measured against; None where no SMFEM series ran."""
         mine = [s for name, s in self.solvers.items() if lookup(name).family == SMFEM and s.status == OK]
         if not mine:
@@ -160,7 +160,7 @@ def _solver_summary(solver, runs, errors: pd.DataFrame, uncertainty: float, fami
     labels = [r.label for r in done]
     if len(set(labels)) < len(labels):  # errors are keyed by label: two runs would share one's error
         twice = next(lab for lab in labels if labels.count(lab) > 1)
-        raise ValueError(f"{solver}: two runs are labelled {twice!r}: studies.cache.Run.label must tell them apart")
+        raise ValueError(f"{solver}: two runs are labelled {twice!r}: smfem.studies.cache.Run.label must tell them apart")
     total, spatial = _measure(errors, solver, TOTAL), _measure(errors, solver, SPATIAL)
     others = {f: _measure(errors, solver, TOTAL, f) for f in FAMILIES}
     points = pd.DataFrame([{"label": r.label, "cpu": r.summary["cpu_time_s"], "dt": _dt(r),

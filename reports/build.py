@@ -9,17 +9,17 @@ from pathlib import Path
 
 import pandas as pd
 
-from runs import zones
-from runs.figures import plastic_zones
-from runs.registry import lookup
+from smfem.runs import zones
+from smfem.runs.figures import plastic_zones
+from smfem.runs.registry import lookup
 
 from . import figures
 from .analysis import CaseAnalysis, analyse
-from studies.cache import RunCache
+from smfem.studies.cache import RunCache
 from .document import render_html, write_pdf
 from .outline import build_sections
 from .sections import ReportContext
-from studies.study import StudyResult, run_study
+from smfem.studies.study import StudyResult, run_study
 from .tables import write_tables
 from .view3d import render_field
 
@@ -84,7 +84,7 @@ def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = No
 
     Parameters
     ----------
-    plan : case studies (:mod:`studies.plan`)
+    plan : case studies (:mod:`smfem.studies.plan`)
     out : output directory
     cache : run cache directory (default ``out/runs``)
     scheduler : dask.distributed scheduler address; None: ``workers`` local processes

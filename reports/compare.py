@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from runs.errors import probe_error
-from runs.files import write_run
-from runs.figures import plastic_zones, plt, save
-from runs.registry import REFERENCE, SMFEM, solve
-from runs.zones import plastic_area
+from smfem.runs.errors import probe_error
+from smfem.runs.files import write_run
+from smfem.runs.figures import plastic_zones, plt, save
+from smfem.runs.registry import REFERENCE, SMFEM, solve
+from smfem.runs.zones import plastic_area
 
 
 def comparison_table(smfem_result, reference_result) -> pd.DataFrame:

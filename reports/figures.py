@@ -12,12 +12,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from runs.figures import place_labels, save  # noqa: E402
-from runs.registry import lookup  # noqa: E402
+from smfem.runs.figures import place_labels, save  # noqa: E402
+from smfem.runs.registry import lookup  # noqa: E402
 
 from .analysis import CaseAnalysis  # noqa: E402
-from studies.effectivity import BAND  # noqa: E402
-from studies.metrics import TARGETS, TRUTH_MARGIN, smoothed  # noqa: E402
+from smfem.studies.effectivity import BAND  # noqa: E402
+from smfem.studies.metrics import TARGETS, TRUTH_MARGIN, smoothed  # noqa: E402
 from .references import published_points, theory_curves  # noqa: E402
 
 #: characters per line of a figure's title (a 6.4 in wide figure at 8 pt)
@@ -157,7 +157,7 @@ def histories(an: CaseAnalysis, path: Path) -> Path:
 
 
 
-#: marker per estimated setting (:func:`studies.effectivity.settings`); the colour is the solver's
+#: marker per estimated setting (:func:`smfem.studies.effectivity.settings`); the colour is the solver's
 SETTING_MARKER = {"defaults": "o", "refine 2": "s", "dt/2": "^"}
 
 

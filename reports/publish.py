@@ -1,7 +1,10 @@
 """A report's findings kept in the repository (``smfem report --full --publish docs/full-report``):
 ``tables/headline.csv``, ``tables/fronts.csv`` and ``tables/carried.csv`` as the run wrote them,
-and ``run.json``: when, on what machine, how long, how many runs, and the largest run's memory.
-Written by the command only, so that what README quotes from it can be made again."""
+``run.json`` (when, on what machine, how long, how many runs, the largest run's memory), and the
+page made of them: ``README.md`` (the verdict, the headline and where each carried series
+stopped) with ``work-precision.png`` (the paper's five scenes' fronts). Written by the command
+only, so that what README quotes from it can be made again; ``python -m reports.publish DIR``
+makes the page again from DIR's tables (what ``--publish`` does after copying them)."""
 
 from __future__ import annotations
 
@@ -13,6 +16,12 @@ import time
 from pathlib import Path
 
 import pandas as pd
+
+from smfem.runs.figures import plt, save
+from smfem.runs.registry import lookup
+
+from .figures import _log_axes
+from .verdict import summary_table, verdict
 
 #: the tables a published report keeps
 PUBLISHED = ("headline", "fronts", "carried")
@@ -56,4 +65,80 @@ def publish(report, directory: Path, settings: str, workers: int, scheduler: str
                     "system": platform.platform(), "python": platform.python_version()},
     }
     (Path(directory) / "run.json").write_text(json.dumps(made, indent=2) + "\n")
+    page(Path(directory))
     return made
+
+
+#: what the summary table's cells mean (README quotes the table with it)
+SUMMARY_NOTE = ("SMFEM reaches the target with the cheaper of its two elements; a speed-up is the other solver's "
+                "CPU time to the same target over SMFEM's, \"> x\" a bound where that solver's series ends above the "
+                "target, \"-\" no run of it.")
+#: the scenes of the published figure: the paper's five
+FIGURE_SCENES = ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact")
+
+
+def front_figure(fronts: pd.DataFrame, path: Path, scenes=FIGURE_SCENES) -> Path:
+    """Each solver's work-precision front (total error against CPU time, log-log) on each of
+    ``scenes``, one panel each, 1 % dashed; the fronts as ``tables/fronts.csv`` has them."""
+    scenes = [s for s in scenes if s in set(fronts.case)]
+    cols = 3
+    rows = -(-(len(scenes) + 1) // cols)  # one cell more, for the legend
+    fig, axes = plt.subplots(rows, cols, figsize=(10.5, 3.2 * rows), layout="constrained")
+    axes = list(axes.flat)
+    shown = {}
+    for ax, scene in zip(axes, scenes):
+        on = fronts[(fronts.case == scene) & fronts.on_front.astype(bool) & (fronts.total > 0)]
+        for solver, pts in on.groupby("solver", sort=False):
+            entry = lookup(solver)
+            pts = pts.sort_values("cpu_s")
+            shown[solver] = ax.plot(pts.cpu_s, 100 * pts.total, **entry.style, label=entry.label)[0]
+        ax.axhline(1.0, color="0.4", ls="--", lw=0.8)
+        ax.set(title=scene.replace("_", " "), xlabel="CPU time, s", ylabel="total error, %")
+        _log_axes(ax)
+    for ax in axes[len(scenes):]:
+        ax.axis("off")
+    axes[len(scenes)].legend(shown.values(), [h.get_label() for h in shown.values()], loc="center", frameon=False,
+                             title="each solver's front\n(dashed: 1 % total error)")
+    return save(fig, path)
+
+
+def _markdown(table: pd.DataFrame) -> str:
+    cells = table.astype(object).where(table.notna(), "").astype(str)
+    lines = ["| " + " | ".join(cells.columns) + " |", "|" + "---|" * len(cells.columns)]
+    lines += ["| " + " | ".join(row) + " |" for row in cells.itertuples(index=False)]
+    return "\n".join(lines)
+
+
+def page(directory: Path) -> Path:
+    """``directory/README.md`` and ``directory/work-precision.png`` from the published tables and
+    run.json (nothing in them is typed by hand)."""
+    tables = directory / "tables"
+    head = pd.read_csv(tables / "headline.csv")
+    made = json.loads((directory / "run.json").read_text())
+    front_figure(pd.read_csv(tables / "fronts.csv"), directory / "work-precision.png")
+    machine = made["machine"]
+    text = [f"# {'The full report' if '--full' in made['command'] else 'The report'}'s findings", "",
+            f"Written by `{made['command']} --publish {directory.as_posix()}` on {made['finished']}: "
+            f"{made['runs_executed']} runs executed, {made['runs_cached']} from the run cache, "
+            f"{made['wall_time_s']:.0f} s wall on {machine['cpus']} cores ({machine['cpu']}, "
+            f"{machine['memory_gb']:.0f} GB); {made['cpu_time_s_of_runs']:.0f} CPU s in the runs, the largest run "
+            f"{made['peak_memory_mb']:.0f} MB ({made['peak_memory_run']}). Errors are total errors (space, harmonics "
+            "and time together) against each scene's stored truth: the largest relative max-norm error over the "
+            "displacement and velocity probes.", "", "## Verdict", "", *summary_table(head), "", SUMMARY_NOTE, "",
+            *[f"- {line}" for line in verdict(head)], "", "## Work precision", "",
+            "![each solver's work-precision front on the paper's five scenes](work-precision.png)", "",
+            "## Headline (`tables/headline.csv`)", "", _markdown(head)]
+    if (tables / "carried.csv").exists():
+        text += ["", "## Where each carried series stopped (`tables/carried.csv`)", "",
+                 _markdown(pd.read_csv(tables / "carried.csv"))]
+    path = directory / "README.md"
+    path.write_text("\n".join(text) + "\n")
+    return path
+
+
+if __name__ == "__main__":
+    import sys
+
+    if len(sys.argv) != 2 or not (Path(sys.argv[1]) / "run.json").exists():
+        sys.exit("usage: python -m reports.publish DIR (a directory written by smfem report --publish DIR)")
+    print(page(Path(sys.argv[1])))

@@ -67,7 +67,7 @@ def theory_curves(case) -> HistoryReference | None:
 
 def best_history(case, reference_run) -> HistoryReference | None:
     """The error reference of ``case``: an exact analytic history, else the finest
-    reference-FEM run (:class:`studies.cache.Run`), else None."""
+    reference-FEM run (:class:`smfem.studies.cache.Run`), else None."""
     theory = theory_curves(case)
     if theory is not None and theory.kind == ANALYTIC:
         return theory

@@ -15,14 +15,14 @@ from pathlib import Path
 import pandas as pd
 
 from .analysis import FAMILIES, HEADLINE_MEASURE, CaseAnalysis
-from studies.calibration import FLOOR, SHARPNESS
-from studies.cache import code_version
-from studies.effectivity import BAND
-from studies.effectivity import summary as effectivity_summary
-from studies.metrics import TARGETS, TRUTH_MARGIN
-from runs.registry import lookup
-from studies.plan import REFERENCE, SMFEM
-from studies.study import StudyResult
+from smfem.studies.calibration import FLOOR, SHARPNESS
+from smfem.studies.cache import code_version
+from smfem.studies.effectivity import BAND
+from smfem.studies.effectivity import summary as effectivity_summary
+from smfem.studies.metrics import TARGETS, TRUTH_MARGIN
+from smfem.runs.registry import lookup
+from smfem.studies.plan import REFERENCE, SMFEM
+from smfem.studies.study import StudyResult
 from .tables import truth_table
 from .verdict import verdict
 
@@ -207,7 +207,7 @@ def _case(ctx: ReportContext, an: CaseAnalysis) -> Section:
     if "work_precision" in figs:
         blocks.append(figure(ctx.out / figs["work_precision"], f"{name}: work-precision diagram (total error)"))
     if an.runs.carried:
-        blocks += [p("Series carried along their ladders (cheapest level first, studies/ladder.py):"),
+        blocks += [p("Series carried along their ladders (cheapest level first, smfem/studies/ladder.py):"),
                    items([f"{lookup(s).label}: {outcome}" for s, outcome in an.runs.carried.items()])]
     blocks += [h("Every run: total error against the truth, and the same-dt difference"), table(_levels_table(an))]
     if len(an.orders):
@@ -249,7 +249,7 @@ def estimates(ctx: ReportContext) -> list[Section]:
     blocks = [
         p("Every 'smfem run' states its own error: companion runs on a mesh half as fine, and on that mesh at "
           "twice and four times the step (and, for SMFEM, half and a quarter of the harmonics), turned into the "
-          "run's error by Richardson's rule at the order observed from the three levels (runs/estimate.py). "
+          "run's error by Richardson's rule at the order observed from the three levels (smfem/runs/estimate.py). "
           "Here each scene's SMFEM and 2D reference runs at the defaults, at twice the mesh and at half the step "
           "are estimated so, and the estimate is set against the actual error from the truth. An honest "
           f"estimate has an effectivity (estimate / actual) between {BAND[0]:g} and {BAND[1]:g}; it is judged "
@@ -318,7 +318,7 @@ def methods(ctx: ReportContext) -> list[Section]:
         "finest mesh with its grid convergence index. The notched scenes use the B-bar form of the element (the "
         "volumetric strain projected on {1, x, y} per element, free of locking under plastic flow).",
         "Stored truths: 'smfem truth CASE --full' makes a scene's truth at its own parameters once (tens of "
-        "minutes to hours) and keeps it in truths/CASE, keyed by a hash of the case's definition and the truth "
+        "minutes to hours) and keeps it in smfem/truths/CASE, keyed by a hash of the case's definition and the truth "
         "method; a report uses it while the key matches and otherwise computes a quick truth (the same modal "
         "method on coarser ladders, or the 2D reference at three halvings of the time step with a mesh "
         "correction) and says so. Each stored truth is calibrated against a second, independent path (the "

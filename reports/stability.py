@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import pandas as pd
 
-from studies.cache import code_version
-from studies.plan import REFERENCE, SMFEM
+from smfem.studies.cache import code_version
+from smfem.studies.plan import REFERENCE, SMFEM
 from .sections import Section, items, p, table
 
 #: studies that carry the section (the tests' tiny study does not)

@@ -30,9 +30,9 @@ from cases.analytic import lame_cylinder
 from cases.geometry import Axis, Pressure
 from cases.params import out_of_range, parse_option
 
-from runs.errors import history_errors
-from runs.registry import REF2D, REF3D, REFERENCE, SMFEM, checks, lookup, solvers
-from runs.registry import solve as run_solver
+from smfem.runs.errors import history_errors
+from smfem.runs.registry import REF2D, REF3D, REFERENCE, SMFEM, checks, lookup, solvers
+from smfem.runs.registry import solve as run_solver
 
 #: the acceptance limits of the stability section
 ENERGY_DRIFT_LIMIT = 1e-10

@@ -7,17 +7,17 @@ from pathlib import Path
 
 import pandas as pd
 
-from runs.estimate import headline
-from runs.registry import lookup
+from smfem.runs.estimate import headline
+from smfem.runs.registry import lookup
 
-from studies import metrics
+from smfem.studies import metrics
 from .analysis import FAMILIES, HEADLINE_MEASURE, CaseAnalysis
-from studies.calibration import FLOOR, SHARPNESS
-from studies.calibration import table as calibration_table
-from studies.effectivity import BAND
-from studies.jobs import NOT_INSTALLED, OK
-from studies.plan import SMFEM
-from studies.truth import PARTS
+from smfem.studies.calibration import FLOOR, SHARPNESS
+from smfem.studies.calibration import table as calibration_table
+from smfem.studies.effectivity import BAND
+from smfem.studies.jobs import NOT_INSTALLED, OK
+from smfem.studies.plan import SMFEM
+from smfem.studies.truth import PARTS
 
 
 def _pct(target: float) -> str:
@@ -54,7 +54,7 @@ def _estimated_errors(an: CaseAnalysis) -> dict:
 
 
 def effectivity_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
-    """Every measured estimate against the truth (:mod:`studies.effectivity`)."""
+    """Every measured estimate against the truth (:mod:`smfem.studies.effectivity`)."""
     frames = [an.effectivity for an in analyses if len(an.effectivity)]
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
@@ -66,7 +66,7 @@ SETTINGS = ("refine", "coarsen", "harmonics", "dt", "dim", "element", "time_sche
 def fronts_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     """Every run with a total error: its settings, CPU, headline error against the truth, whether
     it is on its solver's front, and the key of the truth it was measured against (what
-    ``smfem run --tol`` starts from, :func:`studies.stored.write_fronts`)."""
+    ``smfem run --tol`` starts from, :func:`smfem.studies.stored.write_fronts`)."""
     rows = []
     for an in analyses:
         key = an.truth.key if an.truth is not None else ""
@@ -82,7 +82,7 @@ def fronts_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
 
 
 def inside_model(validity: dict | None) -> str:
-    """``yes``, or what leaves the small-strain model (runs.validity), for the runs table."""
+    """``yes``, or what leaves the small-strain model (smfem.runs.validity), for the runs table."""
     if not validity:
         return ""
     if validity.get("valid"):
@@ -185,7 +185,7 @@ def truth_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
 
 
 def carried_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
-    """Per carried series (:mod:`studies.ladder`): how far it climbed and why it stopped."""
+    """Per carried series (:mod:`smfem.studies.ladder`): how far it climbed and why it stopped."""
     rows = [{"case": an.case.name, "solver": solver, "runs": len(an.runs.series.get(solver, [])),
              "levels": len(next(s.levels for s in an.runs.study.series if s.solver == solver)), "outcome": outcome}
             for an in analyses for solver, outcome in an.runs.carried.items()]
@@ -230,16 +230,16 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "  reading: what an order below 0.5 or negative means\n"
         "published.csv: extrema found near published extrema\n"
         "runs.csv: every run (series, same-dt reference, truth levels), its status, size and cost (peak_memory_mb:\n"
-        "  the worker's resident high-water mark during the run, runs.memory), and inside_model: yes, or which\n"
-        "  small-strain limit it passes (runs.validity);\n"
-        "  estimated_error: the run's own error estimate (runs.estimate), where the study measured it\n"
+        "  the worker's resident high-water mark during the run, smfem.runs.memory), and inside_model: yes, or which\n"
+        "  small-strain limit it passes (smfem.runs.validity);\n"
+        "  estimated_error: the run's own error estimate (smfem.runs.estimate), where the study measured it\n"
         "effectivity.csv: per solver, setting (defaults, refine 2, dt/2) and displacement or velocity probe, the\n"
         "  run's error estimate and its parts, its actual error against the truth and effectivity = estimate /\n"
         f"  actual (where the actual error exceeds {metrics.TRUTH_MARGIN:g} truth uncertainties); honest within "
         f"[{BAND[0]:g}, {BAND[1]:g}]\n"
         "fronts.csv: per run with a total error, its settings (refine, coarsen, harmonics, dt, dim, element,\n  time_scheme), CPU, total\n"
         "  error (headline measure), on_front and the key of the truth it was measured against; smfem report\n"
-        "  --store-fronts keeps it with the stored truths (truths/CASE/front.csv), where smfem run --tol starts\n"
+        "  --store-fronts keeps it with the stored truths (smfem/truths/CASE/front.csv), where smfem run --tol starts\n"
         "carried.csv: per series carried along its ladder to a target or a CPU budget (the full report's):\n"
         "  the runs it made of its levels and where it stopped, and why\n")
     return tables

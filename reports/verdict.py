@@ -13,10 +13,10 @@ import re
 
 import pandas as pd
 
-from runs.registry import lookup
+from smfem.runs.registry import lookup
 
-from studies.metrics import TARGETS, TRUTH_TOO_COARSE
-from studies.plan import SMFEM
+from smfem.studies.metrics import TARGETS, TRUTH_TOO_COARSE
+from smfem.studies.plan import SMFEM
 
 _SPEEDUP = re.compile(r"^([<>]?)\s*([0-9.]+(?:e[+-]?[0-9]+)?)x$")  # 1.05e+03x: a thousand times and more
 _COST = re.compile(r"^([0-9.e+-]+) \((.*)\)$")
@@ -94,3 +94,33 @@ def sentence(case: str, rows: pd.DataFrame) -> str:
 def verdict(head: pd.DataFrame) -> list[str]:
     """One sentence per case of the headline table (``tables/headline.csv``)."""
     return [sentence(case, rows.set_index("solver")) for case, rows in head.groupby("case", sort=False)]
+
+
+def _speedup_cell(speedup) -> str:
+    """``'435'``, ``'> 19.6'``, ``'0.55 (slower)'`` from a speed-up cell; ``'-'`` where there is none."""
+    m = _SPEEDUP.match(str(speedup).strip())
+    if not m:
+        return "-"
+    bound, x = m.group(1), float(m.group(2))
+    return f"{bound + ' ' if bound else ''}{_times(x)}" + (" (slower)" if x < 1 and bound != ">" else "")
+
+
+def summary_table(head: pd.DataFrame, vs=(("reference-2d", "2D FEM"), ("reference-3d", "3D FEM"))) -> list[str]:
+    """The verdict as a Markdown table, one row per scene: the smallest target SMFEM reaches
+    (1 % before 5 %), its CPU time with the cheaper element, and its speed-up there over each
+    of ``vs`` (a bound where that solver's series ends above the target)."""
+    lines = ["| scene | SMFEM reaches | CPU s | " + " | ".join(f"times faster than {n}" for _, n in vs) + " |",
+             "|---|---|---|" + "---|" * len(vs)]
+    for case, rows in head.groupby("case", sort=False):
+        rows = rows.set_index("solver")
+        mine, others = split_smfem(rows)
+        reached = next(((t, c) for t in TARGETS if (c := cheapest(mine, f"cpu_s_to_{_pct(t)}")[1])), None)
+        if reached is None:
+            best = min((e for e in mine.best_error_pct if math.isfinite(e)), default=math.nan)
+            lines.append(f"| {case} | no target (best {_pct_text(best)}) | - | " + " | ".join("-" for _ in vs) + " |")
+            continue
+        target, cost = reached
+        cells = [_speedup_cell(others.at[s, f"smfem_speedup_{_pct(target)}"]) if s in others.index else "-"
+                 for s, _ in vs]
+        lines.append(f"| {case} | {100 * target:g} % | {cost.group(1)} | " + " | ".join(cells) + " |")
+    return lines

@@ -31,7 +31,7 @@ import pandas as pd
 
 from cases import verification
 from cases.geometry import PRISM, RING
-from runs.registry import REF3D, SMFEM, lookup, solve
+from smfem.runs.registry import REF3D, SMFEM, lookup, solve
 
 #: the order each solver's scheme has in each parameter, for the table (space: in L2)
 THEORY = {(SMFEM, "space"): 2.0, (SMFEM, "time"): 2.0, (REF3D, "space"): 3.0, (REF3D, "time"): 2.0}
@@ -152,7 +152,7 @@ def write(table: pd.DataFrame, out: Path, csv: str = "orders.csv") -> list[Path]
 def cached(cache_dir: Path, quick: bool) -> pd.DataFrame:
     """:func:`verify`'s table, kept beside the report's runs by both solvers' code versions (a
     rebuilt report runs nothing new)."""
-    from studies.cache import code_version
+    from smfem.studies.cache import code_version
 
     path = cache_dir / f"code-verification-{'quick' if quick else 'full'}-{code_version(SMFEM)}-{code_version('reference')}.csv"
     if not path.exists():

@@ -1,6 +1,6 @@
 """A picture of the synthesized 3-D field of an SMFEM run (``fields.vtu``): the body rendered
 off-screen by VTK, its title and colour bar drawn by matplotlib, so the picture's text goes
-through the same layout check as every other figure (:func:`runs.figures.save`)."""
+through the same layout check as every other figure (:func:`smfem.runs.figures.save`)."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ def render_field(vtu: Path, png: Path, title: str, length_unit: str) -> Path:
     from matplotlib.colors import Normalize
     from vtkmodules.vtkCommonCore import vtkLogger
 
-    from runs.figures import save
+    from smfem.runs.figures import save
 
     # off-screen rendering needs no X server, but VTK warns about the missing one on every run
     vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)

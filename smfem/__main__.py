@@ -3,6 +3,6 @@ solver: nothing imports it, so it may sit above every layer (docs/architecture.m
 
 import sys
 
-from cli import main
+from smfem.cli import main
 
 sys.exit(main())

@@ -21,9 +21,10 @@ from hypothesis.control import currently_in_test_context
 from cases import CASES, ParameterError, get_case, parse_sets
 from cases.params import MAX_STEPS
 from cases.params import out_of_range
-from cli import main, run as run_command
+import smfem.api
+from smfem.cli import main
 from reports.stability_study import bad_input
-from runs.registry import lookup, solvers
+from smfem.runs.registry import lookup, solvers
 
 
 def cli_outcome(args: list[str]) -> dict:
@@ -143,7 +144,7 @@ def test_unwritable_out_exits_2_before_any_work(tmp_path, capsys, monkeypatch, w
     blocker = tmp_path / "file"
     blocker.write_text("")
     out = {"under a file": blocker / "sub" / "deeper", "is a file": blocker, "in /proc": Path("/proc/smfem-out")}[where]
-    monkeypatch.setattr(run_command, "solve", lambda *a, **k: pytest.fail("the solver ran"))
+    monkeypatch.setattr(smfem.api, "solve_with", lambda *a, **k: pytest.fail("the solver ran"))
     code, err = run_cli(["run", "dome", "--solver", solver, "--out", str(out)], capsys)
     assert code == 2
     assert_one_clear_line(err, "--out")
@@ -154,7 +155,7 @@ def test_out_of_memory_is_one_line_not_a_traceback(tmp_path, capsys, monkeypatch
     def exhausted(*args, **kwargs):
         raise MemoryError
 
-    monkeypatch.setattr(run_command, "solve", exhausted)
+    monkeypatch.setattr(smfem.api, "solve_with", exhausted)
     code, err = run_cli(["run", "dome", "--out", str(tmp_path / "out")], capsys)
     assert code == 2
     assert_one_clear_line(err, "out of memory")

@@ -146,8 +146,8 @@ def test_bbar_brings_the_notched_cylinder_nearer_its_truth():
     H160 2.3 %): the volumetric locking of plastic flow is part of SMFEM's error here, the plastic
     fronts along theta (harmonics) and through the section (mesh), both about first order, the
     rest (docs/scenes.md, section 3)."""
-    from studies import stored
-    from studies.metrics import headline_error
+    from smfem.studies import stored
+    from smfem.studies.metrics import headline_error
 
     truth = stored.read(stored.directory("notched_cylinder"))
     case = get_case("notched_cylinder")

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 from cases import CASES, get_case
-from cli import main
+from smfem.cli import main
 from reference_fem.calculix import build_deck, find_ccx
 from reference_fem.calculix.frd import read_sta
 from reference_fem.calculix.solver import complete, read_results, run
 from reference_fem.mesh import build_mesh, vtk_cells
-from runs.errors import history_errors
-from runs.registry import solve
+from smfem.runs.errors import history_errors
+from smfem.runs.registry import solve
 
 needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None,
                                reason="ccx (CalculiX) is not installed: apt-get install calculix-ccx")

@@ -15,7 +15,7 @@ from cases import get_case, verification
 from cases.geometry import Force
 from cases.layered_cylinder import PULSE
 from cases.params import UnsupportedCase
-from cli import main
+from smfem.cli import main
 from reference_fem import moving
 from reference_fem.calculix import build_deck
 from reference_fem.calculix import solve as calculix
@@ -23,8 +23,8 @@ from reference_fem.calculix.loads import Amplitudes, moving_pressure, serendipit
 from reference_fem.calculix.solver import complete
 from reference_fem.mesh import build_mesh, vtk_cells
 from reference_fem.model import Model
-from runs.errors import history_errors
-from runs.registry import solve
+from smfem.runs.errors import history_errors
+from smfem.runs.registry import solve
 
 needs_ccx = pytest.mark.skipif(shutil.which("ccx") is None,
                                reason="ccx (CalculiX) is not installed: apt-get install calculix-ccx")

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 from cases import get_case
-from cli import main
+from smfem.cli import main
 
 
 def test_run_thick_cylinder_writes_the_contract_files(tmp_path):

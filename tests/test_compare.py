@@ -7,8 +7,8 @@ import pandas as pd
 import pytest
 from PIL import Image
 
-from runs import zones
-from cli import main
+from smfem.runs import zones
+from smfem.cli import main
 
 
 def test_compare_writes_both_runs_the_table_and_zones_side_by_side(tmp_path, capsys):

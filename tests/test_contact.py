@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from cases import get_case
-from studies.metrics import moving_average
+from smfem.studies.metrics import moving_average
 from smfem.contact import ContactLayer
 from smfem.layer_law import NORMAL, SHEAR, SLIP, STICK
 from smfem.model import Model
@@ -161,7 +161,7 @@ def test_massless_face_conserves_energy_whatever_the_layer_stiffness():
 
 
 def test_contact_run_writes_the_contract_files(tmp_path):
-    from cli import main
+    from smfem.cli import main
 
     assert main(["run", "rod_impact", "--set", "t_end=5e-5", "--out", str(tmp_path), "--quiet"]) == 0
     import pandas as pd

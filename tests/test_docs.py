@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from cases import CASES
-from cli import build_parser
+from smfem.cli import build_parser
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 
@@ -31,4 +31,6 @@ def test_every_subcommand_and_option_is_in_the_contract():
 
 def test_the_architecture_names_every_package():
     text = (DOCS / "architecture.md").read_text()
-    assert all(f"{p}/" in text for p in ("cli", "reports", "runs", "smfem", "reference_fem", "cases"))
+    assert all(f"{p}/" in text for p in ("smfem/cli", "reports", "smfem/studies", "smfem/runs", "smfem",
+                                         "reference_fem", "cases", "smfem/truths"))
+    assert "smfem/api.py" in text

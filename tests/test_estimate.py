@@ -1,4 +1,4 @@
-"""Every run's error estimate from cheap companions (runs.estimate)."""
+"""Every run's error estimate from cheap companions (smfem.runs.estimate)."""
 
 from __future__ import annotations
 
@@ -12,9 +12,9 @@ import pandas as pd
 import pytest
 
 from cases import get_case
-from cli import main
-from runs import estimate as E
-from runs.registry import CALCULIX, MODAL, REF2D, SMFEM
+from smfem.cli import main
+from smfem.runs import estimate as E
+from smfem.runs.registry import CALCULIX, MODAL, REF2D, SMFEM
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -170,7 +170,7 @@ def test_the_difference_of_histories_too_small_to_square_is_still_measured():
     is still measured, the L2 norm is NaN, and no warning is raised."""
     import warnings
 
-    from runs.errors import history_errors
+    from smfem.runs.errors import history_errors
 
     t = np.linspace(0.0, 1.0, 11)
     with warnings.catch_warnings():
@@ -183,8 +183,8 @@ def test_tol_starts_from_the_stored_front_and_its_measured_error_holds(tmp_path,
     """On a built-in scene the first run is the stored front's cheapest setting within the
     target, and the error the front measured there is the run's: recomputed against the stored
     truth, it is the same."""
-    from studies.metrics import history_errors
-    from studies.stored import directory, read, read_front
+    from smfem.studies.metrics import history_errors
+    from smfem.studies.stored import directory, read, read_front
 
     front = read_front("thick_cylinder")
     within = front[(front.solver == SMFEM) & (front.total <= 0.05)].sort_values("cpu_s").iloc[0]
@@ -225,7 +225,7 @@ def test_tol_without_the_estimate_is_the_fronts_cheapest_run_alone(tmp_path, cap
 def test_tol_starts_from_the_front_of_the_cases_element_and_time_scheme(tmp_path):
     """The quadratic element's measured front is the smfem-quad9 series'; Gauss in time takes the
     points measured in Gauss time only (Newmark's at the same dt are 4 times less accurate)."""
-    from studies.stored import read_front
+    from smfem.studies.stored import read_front
 
     front = read_front("thick_cylinder")
     mine = front[(front.solver == "smfem-quad9") & (front.time_scheme == "gauss") & (front.total <= 0.01)]
@@ -251,7 +251,7 @@ def test_tol_claims_no_accuracy_for_a_run_outside_the_model(tmp_path, capsys):
 
 
 def test_fronts_are_kept_only_against_the_stored_truth_they_were_measured_with(tmp_path):
-    from studies.stored import FRONT, read_front, write_fronts
+    from smfem.studies.stored import FRONT, read_front, write_fronts
 
     (tmp_path / "dome").mkdir()
     (tmp_path / "dome" / "summary.json").write_text(json.dumps({"key": "abc"}))
@@ -267,7 +267,7 @@ def test_fronts_are_kept_only_against_the_stored_truth_they_were_measured_with(t
 
 def test_a_finer_mesh_takes_off_the_coarsening_first():
     from cases import rebuild
-    from runs.tolerance import finer_mesh, growth
+    from smfem.runs.tolerance import finer_mesh, growth
 
     case = get_case("notched_strip", {"coarsen": 4})
     assert finer_mesh(case, 2) == {"coarsen": 2} and finer_mesh(case, 4) == {"coarsen": 1}
@@ -346,8 +346,8 @@ def test_a_failing_companion_leaves_its_part_out_and_the_others_measured():
 
 
 def test_the_run_is_written_before_its_companions_and_kept_when_they_fail(tmp_path, capsys, monkeypatch):
-    from cli import run as run_command
-    from runs.registry import solve
+    import smfem.api
+    from smfem.runs.registry import solve
 
     out, calls = tmp_path / "run", []
 
@@ -358,7 +358,7 @@ def test_the_run_is_written_before_its_companions_and_kept_when_they_fail(tmp_pa
             raise RuntimeError("a companion broke")
         return solve(solver, case, **kw)
 
-    monkeypatch.setattr(run_command, "solve", solve_then_fail)
+    monkeypatch.setattr(smfem.api, "solve_with", solve_then_fail)
     assert main(["run", "thick_cylinder", "--set", "t_end=2e-4", "--out", str(out), "--quiet", "--no-fields"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     est = summary["error_estimate"]
@@ -372,8 +372,8 @@ def test_the_run_is_written_before_its_companions_and_kept_when_they_fail(tmp_pa
 def test_tol_keeps_its_runs_when_a_later_run_fails(tmp_path, capsys, monkeypatch):
     """--tol's second run raises (out of memory at the finer settings): the first run, written
     as it finished, is the answer; exit 3 with one line saying why the search stopped."""
-    from runs import tolerance
-    from runs.registry import solve
+    from smfem.runs import tolerance
+    from smfem.runs.registry import solve
 
     out, runs = tmp_path / "tol", []
 
@@ -396,7 +396,7 @@ def test_tol_keeps_its_runs_when_a_later_run_fails(tmp_path, capsys, monkeypatch
 
 
 def test_a_partial_estimate_never_meets_the_tolerance():
-    from runs.tolerance import Attempt
+    from smfem.runs.tolerance import Attempt
 
     case = get_case("thick_cylinder")
     whole = Attempt(case, None, {"method": "companions", "partial": False}, 0.001, 1.0, 1.0)
@@ -406,7 +406,7 @@ def test_a_partial_estimate_never_meets_the_tolerance():
 
 
 def test_a_mesh_section_that_cannot_be_coarsened_is_measured_upward_in_space():
-    from runs.estimate import plan
+    from smfem.runs.estimate import plan
 
     odd = plan(get_case("flywheel"), "smfem")
     assert odd.upward == {"space": "space_up"} and odd.companions[0].overrides == {"refine": 2}

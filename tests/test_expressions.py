@@ -18,7 +18,7 @@ from cases import manufactured as mf
 from cases import verification
 from cases.expressions import (MAX_BITS, MAX_DEPTH, MAX_LENGTH, ExpressionError, VariableError, parse)
 from cases.geometry import PRISM, RING
-from cli import main
+from smfem.cli import main
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 #: what sympify read before: the real symbols by name, the rest of its namespace sympy's

@@ -18,7 +18,7 @@ from cases.bodies import Body, assemble
 from cases.case import Case
 from cases.geometry import RING, Amplitude, Axis, ContactPair, Pressure, Probe, Section, Support
 from cases.material import Material
-from runs.registry import solve
+from smfem.runs.registry import solve
 
 L, F_COULOMB, Q_N = 0.1, 0.3, 1e7
 MASS = 7800 * math.pi * (1.0**2 - 0.9**2) * L  # kg, the block's

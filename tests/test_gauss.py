@@ -11,11 +11,11 @@ from cases import UnsupportedCase, get_case
 from reference_fem.calculix.solver import solve as calculix
 from reference_fem.explicit import solve as explicit
 from reference_fem.solver import solve as reference
-from runs.errors import history_errors
+from smfem.runs.errors import history_errors
 from smfem.gauss import GaussSystem, march
 from smfem.model import ModelError
 from smfem.solver import solve as smfem
-from studies.metrics import observed_order
+from smfem.studies.metrics import observed_order
 
 OMEGA, T_END = 3.0, 2.0
 

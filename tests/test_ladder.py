@@ -1,4 +1,4 @@
-"""Series carried to a target (studies/ladder.py): where a ladder stops and why."""
+"""Series carried to a target (smfem/studies/ladder.py): where a ladder stops and why."""
 
 from __future__ import annotations
 
@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from cases import get_case
-from studies.cache import Run
-from studies.executors import run_jobs
-from studies.jobs import Job
-from studies.ladder import Ladder, work
-from studies.plan import REF3D, SMFEM, CaseStudy, Series, Until, grid
-from studies.study import job_of
+from smfem.studies.cache import Run
+from smfem.studies.executors import run_jobs
+from smfem.studies.jobs import Job
+from smfem.studies.ladder import Ladder, work
+from smfem.studies.plan import REF3D, SMFEM, CaseStudy, Series, Until, grid
+from smfem.studies.study import job_of
 
 BASE = {"t_end": 4e-5}
 T = np.linspace(0.0, 4e-5, 9)

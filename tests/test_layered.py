@@ -6,7 +6,7 @@ import numpy as np
 
 from cases import get_case
 from cases.geometry import Region
-from runs.registry import solve
+from smfem.runs.registry import solve
 
 
 def test_a_region_of_the_bodys_own_material_changes_nothing():

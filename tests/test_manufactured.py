@@ -9,8 +9,8 @@ import sympy as sp
 
 from cases import manufactured as mf
 from cases.geometry import PRISM, RING, Force
-from runs.registry import REFERENCE as REF
-from runs.registry import SMFEM
+from smfem.runs.registry import REFERENCE as REF
+from smfem.runs.registry import SMFEM
 
 x, y, z = sp.symbols("x y z", real=True)
 
@@ -97,7 +97,7 @@ def _run(body, solver=SMFEM, drop_traction=False, **params):
     from dataclasses import replace
 
     from cases import verification
-    from runs.registry import solve
+    from smfem.runs.registry import solve
 
     case = verification.build(body, {"t_end": 0.5, **params})
     if drop_traction:
@@ -198,8 +198,8 @@ point = {list(case.probes[0].point)}
 def test_body_forces_and_a_varying_material_come_from_a_scene_file(tmp_path, capsys):
     from cases import verification
     from cases.scene_file import from_text
-    from cli import main
-    from runs.registry import solve
+    from smfem.cli import main
+    from smfem.runs.registry import solve
 
     built = verification.build(PRISM, {"t_end": 0.05})
     text = _scene_text(built)
@@ -229,7 +229,7 @@ def test_smfem_converges_at_newmarks_second_order_in_time(body):
     """At a fixed mesh and harmonics the step's error is measured by successive halvings (the
     mesh's own error cancels): the differences fall at order 2 within 0.2."""
     from cases import verification
-    from runs.registry import solve
+    from smfem.runs.registry import solve
 
     ends = []
     for dt in (0.05, 0.025, 0.0125):
@@ -251,7 +251,7 @@ def test_the_reference_converges_on_the_manufactured_prism_faster_than_second_or
 
 def test_smfem_verify_writes_the_orders_and_a_figure_per_solver(tmp_path, capsys, monkeypatch):
     """The command on a two-ladder plan (the whole quick set takes 20 s: out/verify in the README)."""
-    from cli import main
+    from smfem.cli import main
     from reports import verification
 
     small = (verification.Ladder("smfem", PRISM, "space", ({"refine": 1}, {"refine": 2}),
@@ -272,7 +272,7 @@ def test_smfem_verify_writes_the_orders_and_a_figure_per_solver(tmp_path, capsys
 def test_the_reports_code_verification_section_comes_from_its_cached_table(tmp_path):
     from types import SimpleNamespace
 
-    from studies.cache import code_version
+    from smfem.studies.cache import code_version
     from reports.outline import OUTLINE
     from reports.sections import code_verification, verdict_section
 
@@ -379,7 +379,7 @@ def test_the_iterative_systems_take_the_forces_as_the_direct_solve_does(body, ki
     and the varying material: the same motion as the direct solve, every harmonic kept (the
     forces' and the variation's symmetry decide which modes a nonlinear run keeps)."""
     from cases import verification
-    from runs.registry import solve
+    from smfem.runs.registry import solve
 
     case = verification.build(body, {"refine": 1, "harmonics": 6, "dt": 5e-3, "t_end": 0.3, "tol": 1e-10})
     direct, iterated = solve(SMFEM, case), solve(SMFEM, case, options={"iteration_matrix": kind})
@@ -428,7 +428,7 @@ point = [1.2, 0.1, 0.0]
     ("axisymmetric", '"0", "0", "1"', "varies along x3 or turns about the axis"),
 ])
 def test_a_rings_symmetry_claims_are_checked_against_its_body_forces(tmp_path, capsys, claim, pattern, refused):
-    from cli import main
+    from smfem.cli import main
 
     path = tmp_path / "ring.toml"
     path.write_text(RING_SCENE.format(claim=claim, pattern=pattern))

@@ -113,7 +113,7 @@ class _ReferenceToy(reference_laws.Elastic):
 def test_a_law_registered_in_a_solvers_table_is_what_its_run_uses(solver, monkeypatch):
     """The elastic thick cylinder with its material under a toy law's name, the toy registered:
     the run calls it and gives the default elastic run's histories."""
-    from runs.registry import REFERENCE, SMFEM, solve
+    from smfem.runs.registry import REFERENCE, SMFEM, solve
 
     laws, toy, key = (smfem_laws, _SmfemToy, SMFEM) if solver == "smfem" else (reference_laws, _ReferenceToy, REFERENCE)
     monkeypatch.setitem(laws.LAWS, toy.name, toy)

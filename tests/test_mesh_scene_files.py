@@ -7,7 +7,7 @@ import meshio
 import numpy as np
 import pytest
 
-from cli import main
+from smfem.cli import main
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 FLYWHEEL = (EXAMPLES / "flywheel.toml").read_text()

@@ -17,7 +17,7 @@ from cases.geometry import PRISM, RING
 from cases.msh_section import read_msh
 from cases.params import UnsupportedCase
 from reports.verification import EXACT_IN_TIME
-from runs.registry import SMFEM, solve
+from smfem.runs.registry import SMFEM, solve
 from smfem import elements
 from smfem.assembly import assemble, weighted_elasticity
 from smfem.constitutive import isotropic_D

@@ -15,7 +15,7 @@ from cases.geometry import RING, Pressure, Probe, Support
 from cases.material import Material
 from cases.flywheel import MESH
 from cases.msh_section import read_msh
-from runs.registry import solve
+from smfem.runs.registry import solve
 
 SECTIONS = MESH.parent  # cases/sections: the kept gmsh meshes
 

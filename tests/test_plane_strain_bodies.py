@@ -12,7 +12,7 @@ from cases import UnsupportedCase, get_case
 from cases.geometry import PRISM
 from reference_fem.mesh import build_mesh
 from reference_fem.model import Model
-from runs.registry import solve
+from smfem.runs.registry import solve
 
 #: 16 elements round the rings, 40 steps: the clearance closes at 2.9 ms
 SHORT = dict(theta_elements=16, t_end=4e-3)

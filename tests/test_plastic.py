@@ -102,7 +102,7 @@ def test_not_converged_step_is_reported_with_the_history_kept():
 def test_cli_exit_3_when_a_step_does_not_converge(monkeypatch, tmp_path, capsys):
     import pandas as pd
 
-    from cli import main
+    from smfem.cli import main
 
     monkeypatch.setattr("smfem.solver.SolverOptions", lambda: SolverOptions(max_iterations=2))
     assert main(["run", "thick_cylinder", "--set", "plastic=true", "--out", str(tmp_path), "--quiet"]) == 3
@@ -113,7 +113,7 @@ def test_cli_exit_3_when_a_step_does_not_converge(monkeypatch, tmp_path, capsys)
 def test_plastic_run_writes_the_plastic_zones_at_the_paper_times(tmp_path):
     import matplotlib.image as mpimg
 
-    from cli import main
+    from smfem.cli import main
 
     assert main(["run", "notched_strip", "--set", "harmonics=20", "--out", str(tmp_path), "--quiet"]) == 0
     image = mpimg.imread(tmp_path / "plastic_zones.png")

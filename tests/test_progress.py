@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import io
 
-from runs.progress import INTERVAL, Progress
+from smfem.runs.progress import INTERVAL, Progress
 
 
 class _Clock:
@@ -56,7 +56,7 @@ def test_an_estimate_of_the_time_left_is_said_while_running_and_not_at_the_end()
 
 
 def test_the_time_left_counts_unknown_runs_at_the_mean_of_the_known_ones():
-    from studies.study import time_left
+    from smfem.studies.study import time_left
 
     assert time_left({"a": 100.0, "b": 300.0, "c": None}, workers=2) == (100 + 300 + 200) / 2
     assert time_left({"a": None}, workers=2) is None and time_left({}, workers=2) is None
@@ -67,9 +67,9 @@ def test_a_runs_earlier_wall_time_is_found_across_code_versions(tmp_path, monkey
     code version made it; a job never run has no estimate."""
     import json
 
-    from studies import cache as cache_module
-    from studies.cache import RunCache
-    from studies.jobs import Job
+    from smfem.studies import cache as cache_module
+    from smfem.studies.cache import RunCache
+    from smfem.studies.jobs import Job
 
     job, other = Job.make("dome", "smfem", {"refine": 2}), Job.make("dome", "smfem", {"refine": 3})
     cache = RunCache(tmp_path)

@@ -10,8 +10,8 @@ from cases.analytic import hinged_strip_sine, lame_cylinder
 from cases.geometry import PRISM, RING
 from helpers import (clamped_plate, with_element, distorted_mesh, dome_with, nearest_node, patch_solution,
                      thick_cylinder_internal_pressure)
-from runs import registry
-from runs.errors import history_errors
+from smfem.runs import registry
+from smfem.runs.errors import history_errors
 from smfem import elements
 from smfem.assembly import assemble, weighted_elasticity
 from smfem.constitutive import isotropic_D
@@ -131,7 +131,7 @@ def test_thin_dome_does_not_lock_up_to_r_over_h_1000():
 
 
 def reference_error(run, reference) -> float:
-    """The largest relative max-norm difference of the probe histories (runs.errors)."""
+    """The largest relative max-norm difference of the probe histories (smfem.runs.errors)."""
     return max(history_errors(run.t, run.history[k], reference.t, h)[0] for k, h in reference.history.items())
 
 
@@ -211,8 +211,8 @@ def test_a_quad9_run_writes_triquadratic_hexahedra_that_hold_the_curved_body(tmp
     the next angle, are left-handed: their volumes are negative."""
     import pyvista as pv
 
-    from cli import main
-    from runs.files import read_run
+    from smfem.cli import main
+    from smfem.runs.files import read_run
 
     case = get_case("dome", {"coarsen": 4})  # 1 x 5 elements
     sets = ["element=quad9", "coarsen=4", f"t_end={2 * case.dt}"]
@@ -353,7 +353,7 @@ def test_the_element_is_a_scene_parameter(tmp_path, capsys):
     name in summary.json's params); a name that is not one of the scene's choices exits 2."""
     import json
 
-    from cli import main
+    from smfem.cli import main
 
     for element in ("moment4", "quad9"):
         assert main(["run", "dome", "--set", f"element={element}", "--set", "t_end=2e-5", "--out",

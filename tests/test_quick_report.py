@@ -1,6 +1,6 @@
 """The quick report as a reader meets it (slow: about 10 minutes with a cold run cache).
 
-Every figure the report draws goes through ``runs.figures.save``, whose layout check warns;
+Every figure the report draws goes through ``smfem.runs.figures.save``, whose layout check warns;
 the test configuration turns that warning into an error, so building the report here checks
 every one of its figures: text inside, no two labels overlapping, a unit on every axis.
 ``SMFEM_REPORT_CACHE`` names a run cache to reuse (default: the report's own, out/report/runs).
@@ -15,7 +15,7 @@ import pytest
 
 from browser import chromium, verdict_on_first_screen
 from reports.build import build
-from studies.plan import quick
+from smfem.studies.plan import quick
 
 
 @pytest.mark.slow

@@ -216,7 +216,7 @@ def test_unsupported_contact_variants():
 
 
 def test_cli_runs_rod_impact_with_the_reference(tmp_path):
-    from cli import main
+    from smfem.cli import main
 
     out = tmp_path / "rod"
     assert main(["run", "rod_impact", "--solver", "reference", "--set", "t_end=5e-5", "--out", str(out), "--quiet"]) == 0

@@ -8,7 +8,7 @@ import scipy.sparse as sp
 
 from cases import get_case
 from reference_fem.linalg import PreconditionedTangent, factorize
-from runs.registry import solve
+from smfem.runs.registry import solve
 
 
 def _spd(n, rng):
@@ -69,7 +69,7 @@ def test_plastic_histories_are_the_factorized_tangents_to_the_solver_tolerance(n
 
 
 def test_an_unknown_linear_solver_is_refused_in_one_line(capsys):
-    from cli import main
+    from smfem.cli import main
 
     assert main(["run", "notched_strip", "--solver", "reference", "--set", "linear_solver=mumps"]) == 2
     err = capsys.readouterr().err
@@ -78,7 +78,7 @@ def test_an_unknown_linear_solver_is_refused_in_one_line(capsys):
 
 def test_the_registry_names_the_reference_linear_solvers_and_the_explicit_engine_has_none():
     from reference_fem.linalg import LINEAR_SOLVERS
-    from runs.registry import lookup
+    from smfem.runs.registry import lookup
 
     assert lookup("reference").options()["linear_solver"].choices == LINEAR_SOLVERS
     assert "linear_solver" not in lookup("reference-explicit").options()
@@ -88,8 +88,8 @@ def test_bbar_frees_the_implicit_reference_of_locking_in_plastic_flow():
     """The notched cylinder's plastic flow is nearly incompressible: the standard 9-node element
     locks, B-bar (the explicit truth's element) does not. Against the stored truth (first 12 ms)
     the B-bar run is nearer, and says so in its summary."""
-    from runs.errors import history_errors
-    from studies import stored
+    from smfem.runs.errors import history_errors
+    from smfem.studies import stored
 
     truth = stored.read(stored.directory("notched_cylinder"))
     case = get_case("notched_cylinder", {"refine": 1, "t_end": 0.012})

@@ -14,7 +14,7 @@ from test_mesh_sections_reference import relative, ring_case
 
 from cases import UnsupportedCase, get_case
 from cases.geometry import Probe
-from runs.registry import solve
+from smfem.runs.registry import solve
 
 
 def test_the_mirror_half_of_the_layered_cylinder_gives_the_whole_ones_histories_with_half_the_unknowns():

@@ -30,8 +30,8 @@ from reference_fem.face import face_of
 from reference_fem.newmark import newmark_constants
 from reference_fem.probes import Probes
 from reference_fem.solver import _system
-from runs.errors import history_errors
-from runs.registry import solve
+from smfem.runs.errors import history_errors
+from smfem.runs.registry import solve
 
 #: round-off level of a penetration (m), for bodies of about 1 m
 PENETRATION = 1e-12

@@ -23,8 +23,8 @@ from reference_fem.calculix import build_deck
 from reference_fem.explicit import ExplicitSystem, largest_frequency
 from reference_fem.harmonic import HarmonicModel
 from reference_fem.probes import Probes
-from runs.errors import history_errors
-from runs.registry import solve
+from smfem.runs.errors import history_errors
+from smfem.runs.registry import solve
 
 NAME = "layered_cylinder"
 RADII = (1.0, 1.4, 2.0)
@@ -292,7 +292,7 @@ def test_calculix_runs_the_two_materials():
 def test_fields_carry_each_elements_region(solver, tmp_path):
     case = get_case(NAME, {"t_end": 2 * get_case(NAME).dt})
     result = solve(solver, case, fields=True)
-    result.mesh.write(tmp_path / "fields.vtu")  # as runs.files writes a run's fields
+    result.mesh.write(tmp_path / "fields.vtu")  # as smfem.runs.files writes a run's fields
     back = meshio.read(tmp_path / "fields.vtu")
     region = np.concatenate(back.cell_data["region"])
     assert np.issubdtype(region.dtype, np.integer) and np.bincount(region).tolist() == [8 * 64, 12 * 64]

@@ -1,4 +1,4 @@
-"""The solver table (:mod:`runs.registry`) is the one place a solver is declared: a toy solver
+"""The solver table (:mod:`smfem.runs.registry`) is the one place a solver is declared: a toy solver
 registered there is offered by the command line and runs through a study into its tables and
 figures; the built-in entries keep the report's styles and tell the truth about what they
 refuse."""
@@ -12,12 +12,12 @@ import pandas as pd
 import pytest
 
 from cases import UnsupportedCase, get_case, rebuild
-from cli import main
+from smfem.cli import main
 from reports import figures
 from reports.build import build
-from studies.plan import MODAL_TRUTH, REF2D, SMFEM, CaseStudy, Series, TruthPlan
-from runs import registry
-from runs.registry import CALCULIX, CONTACT, PLASTICITY, REF3D, REFERENCE, SMFEM_QUAD9, Solver, lookup, solvers
+from smfem.studies.plan import MODAL_TRUTH, REF2D, SMFEM, CaseStudy, Series, TruthPlan
+from smfem.runs import registry
+from smfem.runs.registry import CALCULIX, CONTACT, PLASTICITY, REF3D, REFERENCE, SMFEM_QUAD9, Solver, lookup, solvers
 
 COARSE = "reference-coarse"
 
@@ -73,7 +73,7 @@ def test_smfem_with_the_quadratic_element_is_a_series_of_its_own():
     """The quadratic element's entry fixes the case's element as the 3-D reference fixes dim:
     in the job's parameters (so its cached runs and records say so), in the case it runs, and
     as the entry a quad9 case is named by (``smfem run --tol`` reads its front)."""
-    from studies.jobs import Job
+    from smfem.studies.jobs import Job
 
     job = Job.make("dome", SMFEM_QUAD9, {"refine": 2})
     assert dict(job.overrides) == {"refine": 2, "element": "quad9"}

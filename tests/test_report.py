@@ -12,16 +12,16 @@ import pytest
 
 from browser import chromium, screenshot, verdict_on_first_screen
 from cases import UnsupportedCase, get_case
-from studies import metrics
+from smfem.studies import metrics
 from reports.analysis import analyse
 from reports.build import build
-from studies.cache import Run, RunCache
-from studies.jobs import NOT_AVAILABLE, NOT_INSTALLED, Job, execute
-from studies.plan import CALCULIX, MODAL_TRUTH, REF2D, REF3D, SMFEM, SMFEM_QUAD9, TIME_TRUTH, CaseStudy, Series, TruthPlan, Until, grid, quick
+from smfem.studies.cache import Run, RunCache
+from smfem.studies.jobs import NOT_AVAILABLE, NOT_INSTALLED, Job, execute
+from smfem.studies.plan import CALCULIX, MODAL_TRUTH, REF2D, REF3D, SMFEM, SMFEM_QUAD9, TIME_TRUTH, CaseStudy, Series, TruthPlan, Until, grid, quick
 from reports.references import rod_histories
-from studies.study import CaseRuns
+from smfem.studies.study import CaseRuns
 from reports.tables import headline_table
-from cli import main
+from smfem.cli import main
 
 #: a study of seconds: short windows, coarse meshes; the thick cylinder's truth is too coarse
 #: for either target on purpose
@@ -143,8 +143,8 @@ def test_the_full_report_carries_every_series_against_a_stored_truth_with_both_s
     """Every series of more than one level climbs its ladder to 1 % or its CPU budget, which needs
     the scene's stored truth (its key the full plan's: a truth computed by the study comes too late
     to judge a ladder); the paper's five scenes have both SMFEM elements."""
-    from studies.plan import FULL_UNTIL, full
-    from studies.study import stored_truth
+    from smfem.studies.plan import FULL_UNTIL, full
+    from smfem.studies.study import stored_truth
 
     for study in full():
         assert all(s.until == FULL_UNTIL for s in study.series if len(s.levels) > 1), study.case
@@ -239,7 +239,7 @@ def test_study_on_a_dask_local_cluster_matches_the_local_processes_and_carries_a
     """Two dask worker processes run a series carried to a target (the tiny report's dome truth
     standing in for a stored one): each next level is submitted while the cluster runs, the
     ladder stops at its first run within the target, and its histories are the local ones."""
-    import studies.study
+    import smfem.studies.study
     from distributed import LocalCluster
 
     dome = tiny.analyses[0]
@@ -251,7 +251,7 @@ def test_study_on_a_dask_local_cluster_matches_the_local_processes_and_carries_a
     until = Until(target=(errors[0] + errors[1]) / 2, budget_s=600)
     plan = (CaseStudy("dome", (Series(SMFEM, ({"refine": 1}, {"refine": 2}, {"refine": 3}), until=until),),
                       reference=(REF2D, {"refine": 4}), base={"t_end": 4e-5}),)
-    monkeypatch.setattr(studies.study, "stored_truth", lambda study: (dome.truth, "the tiny report's"))
+    monkeypatch.setattr(smfem.studies.study, "stored_truth", lambda study: (dome.truth, "the tiny report's"))
     # two worker processes of one thread each, as `dask worker ADDRESS --nworkers 2 --nthreads 1`
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         assert len(cluster.workers) == 2
@@ -308,9 +308,9 @@ def test_a_solver_that_cannot_run_a_case_gives_not_available(monkeypatch, tmp_pa
 
 
 def test_study_command_writes_tables_and_figures_from_the_cache(tiny, tmp_path, monkeypatch, capsys):
-    import studies.plan
+    import smfem.studies.plan
 
-    monkeypatch.setattr(studies.plan, "quick", lambda: TINY)  # the study command reads it when it runs
+    monkeypatch.setattr(smfem.studies.plan, "quick", lambda: TINY)  # the study command reads it when it runs
     out = tmp_path / "study"
     assert main(["study", "dome", "--out", str(out), "--cache", str(tiny.out / "runs"), "--quiet"]) == 0
     printed = capsys.readouterr().out
@@ -429,7 +429,7 @@ def test_rod_theory_histories():
 def test_stability_section_renders_the_cached_table(tmp_path):
     from types import SimpleNamespace
 
-    from studies.cache import code_version
+    from smfem.studies.cache import code_version
     from reports.outline import OUTLINE
     from reports.sections import cases
     from reports.stability import stability
@@ -462,7 +462,7 @@ def test_the_3d_view_renders_without_library_noise(tmp_path):
     box = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], float)[[0, 1, 3, 2, 4, 5, 7, 6]]
     vtu = tmp_path / "box.vtu"
     meshio.write(vtu, meshio.Mesh(box, [("hexahedron", np.arange(8)[None])], point_data={"displacement": 0.1 * box}))
-    code = ("import warnings; from runs.figures import FigureLayoutWarning; "
+    code = ("import warnings; from smfem.runs.figures import FigureLayoutWarning; "
             "warnings.simplefilter('error', FigureLayoutWarning); "  # the picture's text is checked too
             f"from reports.view3d import render_field; render_field({str(vtu)!r}, {str(tmp_path / 'box.png')!r}, 'box', 'm')")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
@@ -530,7 +530,7 @@ def test_verdict_sentences_say_who_is_faster_and_why_no_claim():
     far = rows((SMFEM, "0.149 (r2 H1)", "0.025 (r1 H1)", "", "", 0.8, 0.04),
                (REF3D, "157 (r2 dt2.5e-06)", "121 (r2)", "1.05e+03x", "> 4.85e+03x", 0.98, 0.04))
     assert sentence("dome", far).endswith(": 1050 times faster than the 3D reference.")
-    from cli.study import headline_lines
+    from smfem.cli.study import headline_lines
 
     lines = headline_lines(both.reset_index().assign(case="dome"))
     assert lines[0].startswith("dome   1 %: smfem-quad9 0.146 s CPU") and "reference-2d 1.83x" in lines[0]
@@ -585,8 +585,8 @@ def test_a_series_carries_its_solver_options_to_its_jobs_and_labels():
     """The full report's 3D notched cylinder is the reference with B-bar elements: its jobs carry
     the option (a run of its own in the cache) and its labels say so; a series without options
     makes the jobs it always made."""
-    from studies.plan import _s, full
-    from studies.study import _jobs
+    from smfem.studies.plan import _s, full
+    from smfem.studies.study import _jobs
 
     study = CaseStudy("notched_cylinder", (_s(REF3D, {"refine": 1}, bbar=True), _s(REF2D, {"refine": 1})),
                       reference=None)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from cases import get_case
-from runs.files import read_run, write_run
-from runs.registry import solve
+from smfem.runs.files import read_run, write_run
+from smfem.runs.registry import solve
 
 
 def test_a_written_run_reads_back_as_the_result_it_was_written_from(tmp_path):

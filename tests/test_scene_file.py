@@ -14,8 +14,8 @@ import pytest
 from cases import CASES, VARIANTS, ParameterError, get_case, rebuild
 from cases.params import COMMON
 from cases.scene_file import OPTIONAL, REQUIRED, from_text
-from cli import main
-from runs.registry import solve
+from smfem.cli import main
+from smfem.runs.registry import solve
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 #: every field of a Case that a solver reads

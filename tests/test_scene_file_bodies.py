@@ -17,7 +17,7 @@ from cases import get_case, rebuild
 from cases.geometry import ContactPair, Pressure, Region, Support
 from cases.material import Material
 from cases.scene_file import from_text
-from cli import main
+from smfem.cli import main
 from tests.test_scene_file_fuzz import FAST, dumps, mutate, read
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "rod_collision.toml"

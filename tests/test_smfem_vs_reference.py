@@ -1,7 +1,7 @@
 """SMFEM against the independent reference FEM (2D) at converged settings.
 
 Error: relative max-norm over the window, max|a - b| / max|b|, per displacement probe; for
-plastic-strain probes the relative difference of the peaks (``runs.errors.probe_error``).
+plastic-strain probes the relative difference of the peaks (``smfem.runs.errors.probe_error``).
 """
 
 import numpy as np
@@ -9,8 +9,8 @@ import pytest
 
 from cases import get_case
 from reference_fem import solve as reference
-from runs.errors import probe_error
-from runs.zones import plastic_area
+from smfem.runs.errors import probe_error
+from smfem.runs.zones import plastic_area
 from smfem.solver import solve as smfem
 
 

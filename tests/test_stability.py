@@ -11,7 +11,7 @@ import pytest
 from cases import get_case
 from reports import stability_study as study
 from reports.stability_study import AGREEMENT_LIMIT, ENERGY_DRIFT_LIMIT
-from runs.registry import REF2D, REF3D, SMFEM
+from smfem.runs.registry import REF2D, REF3D, SMFEM
 
 
 def assert_conservative(rows):

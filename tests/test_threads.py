@@ -1,4 +1,4 @@
-"""The numerics run on one BLAS/OpenMP thread in every entry point (runs/threads.py)."""
+"""The numerics run on one BLAS/OpenMP thread in every entry point (smfem/runs/threads.py)."""
 
 from __future__ import annotations
 
@@ -19,8 +19,9 @@ print(json.dumps([p["num_threads"] for p in threadpool_info()]))
 
 
 @pytest.mark.parametrize("entry", [
-    "from cli import main; main(['cases'])",
-    "from studies.jobs import Job, execute; execute(Job.make('dome', 'smfem', {'t_end': 1e-5}))",
+    "from smfem.cli import main; main(['cases'])",
+    "import smfem; smfem.run('dome', t_end=1e-5, estimate=False, fields=False)",
+    "from smfem.studies.jobs import Job, execute; execute(Job.make('dome', 'smfem', {'t_end': 1e-5}))",
 ])
 def test_entry_points_pin_one_thread(entry):
     """In a fresh process (the pools are per process), with no thread variable set."""
@@ -35,7 +36,7 @@ def test_entry_points_pin_one_thread(entry):
 def test_the_count_can_be_set_for_a_measurement(monkeypatch):
     from threadpoolctl import threadpool_info
 
-    from runs import threads
+    from smfem.runs import threads
 
     monkeypatch.setenv(threads.VARIABLE, "2")
     assert threads.pin() == 2

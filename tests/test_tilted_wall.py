@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from cases import UnsupportedCase, get_case
-from studies.metrics import history_errors
+from smfem.studies.metrics import history_errors
 from smfem.contact import ContactLayer
 from smfem.model import Model
 from smfem.options import SolverOptions

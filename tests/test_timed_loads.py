@@ -12,8 +12,8 @@ import pytest
 
 from cases import get_case
 from cases.geometry import PRISM, RING, Amplitude, Pressure, interval_fourier
-from cli import main
-from runs.registry import solve
+from smfem.cli import main
+from smfem.runs.registry import solve
 from tests.test_scene_file import EXAMPLES, USER_SCENE
 
 #: the scene of one's own with its patch as a pulse, and moving
@@ -194,10 +194,10 @@ def test_the_reference_integrates_a_partly_covered_facet_exactly(dim):
 
 
 def test_a_truths_key_holds_the_loads_history_and_path():
-    """The stored truths' keys (studies.stored) name a load's amplitude and speed; a step held in
+    """The stored truths' keys (smfem.studies.stored) name a load's amplitude and speed; a step held in
     place keys as it did before loads had a history (the stored truths stand)."""
-    from studies.stored import case_definition, key_of
-    from studies.truth import plan_for
+    from smfem.studies.stored import case_definition, key_of
+    from smfem.studies.truth import plan_for
 
     step = get_case("layered_cylinder")
     plan = plan_for("layered_cylinder", {}, "full")

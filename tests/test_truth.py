@@ -18,11 +18,11 @@ from helpers import thick_cylinder_internal_pressure
 from reference_fem import modal, static
 from reference_fem.harmonic import HarmonicModel
 from reference_fem.probes import Probes
-from studies import metrics
-from studies.cache import RunCache
-from studies.plan import MODAL_TRUTH, TIME_TRUTH, TruthPlan
-from studies.study import run_cached
-from studies.truth import assemble, gci, jobs, plan_for
+from smfem.studies import metrics
+from smfem.studies.cache import RunCache
+from smfem.studies.plan import MODAL_TRUTH, TIME_TRUTH, TruthPlan
+from smfem.studies.study import run_cached
+from smfem.studies.truth import assemble, gci, jobs, plan_for
 
 
 def _static(model: HarmonicModel) -> np.ndarray:
@@ -276,7 +276,7 @@ def test_truth_command_writes_history_and_summary_and_refuses_chosen_keys(tmp_pa
 
     import pandas as pd
 
-    from cli import main
+    from smfem.cli import main
 
     out = tmp_path / "truth"
     assert main(["truth", "dome", "--set", "t_end=5e-5", "--out", str(out), "--quiet"]) == 0
@@ -299,7 +299,7 @@ def _synthetic_runs(name: str, plan: TruthPlan, base: dict, history):
     """Runs of a truth plan whose histories are ``history(t, dt, refine)``."""
     import pandas as pd
 
-    from studies.cache import Run
+    from smfem.studies.cache import Run
 
     case = get_case(name, base)
     runs = {}
@@ -362,7 +362,7 @@ def test_plastic_thick_cylinder_truth_uncertainty_covers_a_much_finer_run(tmp_pa
     steps (yielding and the Heaviside load excite the whole spectrum: 0.5 to 1.3 measured),
     so the truth is the finest level, its uncertainty the GCI of the ladder, which must cover
     what dt/16 says is left."""
-    from studies.jobs import Job
+    from smfem.studies.jobs import Job
 
     base = {"plastic": True, "t_end": 2e-3}
     plan = TruthPlan(TIME_TRUTH, refine=(1, 1))  # one mesh: the time part alone
@@ -383,7 +383,7 @@ def test_explicit_truth_extrapolates_where_the_interleaved_pair_confirms_it():
     observed order recovers the exact history, and the r3-r6 pair, extrapolated at the same
     order, lands on it too, so the uncertainty is tiny; an error that is not a power of h
     (the pair disagrees) leaves the finest mesh and its grid convergence index."""
-    from studies.plan import explicit_truth
+    from smfem.studies.plan import explicit_truth
 
     plan = explicit_truth(bbar=True)
     exact = lambda t: np.sin(300 * t) - 0.01
@@ -402,7 +402,7 @@ def test_explicit_truth_extrapolates_where_the_interleaved_pair_confirms_it():
 
 
 def test_explicit_plans_and_their_second_paths():
-    from studies.calibration import second_plan
+    from smfem.studies.calibration import second_plan
 
     for name in ("notched_cylinder", "notched_strip", "rod_impact"):
         plan = plan_for(name, {}, "full")
@@ -419,7 +419,7 @@ SCENES = ("dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_im
           "layered_cylinder_pulse", "moving_load", "moving_load_notched", "rod_collision")
 #: stored truths whose second path is farther than both uncertainties on some probes, so the
 #: truth's uncertainty there is widened to the distance plus the second path's (issue 39;
-#: studies.calibration.widen): ring_in_ring's implicit and explicit engines stay 0.10-0.18 %
+#: smfem.studies.calibration.widen): ring_in_ring's implicit and explicit engines stay 0.10-0.18 %
 #: apart on the inner ring's displacements at every mesh r1-r4 and step dt / 32-dt / 64
 #: (docs/scenes.md); its surface stress's first-order mesh ladder is not sharp (0.72 % stated,
 #: 0.15 % from the second path)
@@ -427,13 +427,13 @@ WIDENED = ("ring_in_ring",)
 
 
 def _stored(name):
-    from studies import stored
+    from smfem.studies import stored
 
     return stored.read(stored.directory(name))
 
 
 def test_a_truths_key_follows_the_case_and_the_method():
-    from studies.stored import key_of
+    from smfem.studies.stored import key_of
 
     case, plan = get_case("notched_cylinder"), plan_for("notched_cylinder", {}, "full")
     assert key_of(case, plan) == key_of(get_case("notched_cylinder"), plan_for("notched_cylinder", {}, "full"))
@@ -451,11 +451,11 @@ def test_stored_truth_key_matches_its_case(name):
     truth method changes, this fails until ``smfem truth NAME --full`` is run again."""
     import json
 
-    from studies.stored import directory, key_of
+    from smfem.studies.stored import directory, key_of
 
     summary = json.loads((directory(name) / "summary.json").read_text())
     assert summary["key"] == key_of(get_case(name), plan_for(name, {}, "full")), (
-        f"truths/{name} no longer matches its case: run 'smfem truth {name} --full'")
+        f"smfem/truths/{name} no longer matches its case: run 'smfem truth {name} --full'")
 
 
 @pytest.mark.parametrize("name", SCENES + WIDENED)
@@ -463,11 +463,11 @@ def test_stored_front_was_measured_against_the_stored_truth(name):
     """``smfem run --tol`` starts from a scene's stored front only while it was measured against
     the stored truth: when the truth is made again, this fails until ``smfem report
     --store-fronts`` is run again."""
-    from studies.stored import read_front
+    from smfem.studies.stored import read_front
 
     front = read_front(name)
-    assert front is not None, f"truths/{name}/front.csv is missing or stale: run 'smfem report --store-fronts'"
-    from studies.plan import quick
+    assert front is not None, f"smfem/truths/{name}/front.csv is missing or stale: run 'smfem report --store-fronts'"
+    from smfem.studies.plan import quick
 
     series = {s.solver for study in quick() if study.case == name for s in study.series}
     expected = {"smfem"} | ({"reference-2d"} & series)  # the flywheel's reference FEM is 3D only
@@ -497,9 +497,9 @@ def test_calibration_of_the_stored_truth(name):
     """The distance to the second path, recomputed from the two stored histories, is the one
     recorded; every probe's uncertainty covers it (with the second path's) and is at most three
     times it where it is above the floor."""
-    from studies import stored
-    from studies.calibration import FLOOR, SHARPNESS
-    from runs.errors import history_errors
+    from smfem.studies import stored
+    from smfem.studies.calibration import FLOOR, SHARPNESS
+    from smfem.runs.errors import history_errors
 
     truth, second = _stored(name), stored.read(stored.directory(name) / "second")
     window = get_case(name).references.get("comparison_window_s", 0.0)
@@ -518,8 +518,8 @@ def test_a_widened_truth_covers_its_second_path_and_says_so(name):
     the widened ones by exactly the distance plus the second path's uncertainty, above their
     own estimate and with a note; only ring_in_ring's inner-ring displacements are widened, and
     only a stress is not sharp."""
-    from runs.errors import history_errors
-    from studies import stored
+    from smfem.runs.errors import history_errors
+    from smfem.studies import stored
 
     truth, second = _stored(name), stored.read(stored.directory(name) / "second")
     window = get_case(name).references.get("comparison_window_s", 0.0)
@@ -539,7 +539,7 @@ def test_a_widened_truth_covers_its_second_path_and_says_so(name):
 def test_widen_leaves_a_covered_probe_and_widens_the_others():
     from types import SimpleNamespace
 
-    from studies.calibration import widen
+    from smfem.studies.calibration import widen
 
     truth = SimpleNamespace(uncertainty={"a": 1e-3, "b": 1e-4}, notes={"b": "finest"})
     cal = {"probes": {"a": {"distance": 1.5e-3, "uncertainty": 1e-3, "second_uncertainty": 1e-3, "covered": True,
@@ -559,8 +559,8 @@ def test_explicit_plastic_thick_cylinder_agrees_with_the_implicit_ladder(tmp_pat
     """The two truth engines on the plastic thick cylinder (half the window): the explicit
     reference over r1, r2, r4 against the implicit time-step ladder (r1 at dt, dt/2, dt/4, the
     r2 mesh correcting it): within the sum of their stated uncertainties."""
-    from studies.calibration import calibrate
-    from studies.plan import EXPLICIT, EXPLICIT_TRUTH
+    from smfem.studies.calibration import calibrate
+    from smfem.studies.plan import EXPLICIT, EXPLICIT_TRUTH
 
     base = {"plastic": True, "t_end": 2e-3}
     explicit = make_truth("thick_cylinder", base, TruthPlan(EXPLICIT_TRUTH, refine=(1, 2, 4), solver=EXPLICIT,

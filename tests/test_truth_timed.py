@@ -150,7 +150,7 @@ def moving_strip_exact(case, t, harmonics=640, p=40):
 
 
 def _stored(name):
-    from studies import stored
+    from smfem.studies import stored
 
     return stored.read(stored.directory(name))
 
@@ -185,7 +185,7 @@ def test_smfem_and_the_reference_on_the_moving_load_against_its_exact_answer():
     """Total error at the scene's defaults (dt = 2e-6 s; SMFEM 60 harmonics, the 2D reference
     refine 1), against the exact answer at 240 harmonics (1.5e-4 from 640): within 0.5 %
     (measured SMFEM 0.24 / 0.35 %, reference 0.22 / 0.31 % on mid_uz / q_uz)."""
-    from runs.registry import solve
+    from smfem.runs.registry import solve
 
     case = get_case("moving_load")
     t = np.arange(case.n_steps + 1) * case.dt
@@ -205,7 +205,7 @@ def test_stored_truth_of_a_timed_load_against_its_exact_answer(name, exact, ever
     its r16 mesh's GCI understates a difference a thousand times below what it judges). The
     moving load's on its scene's dt grid, every 16th sample (8 CPU s; on all 4801, 190 s, its
     gaps are 1.1e-4 / 1.2e-4 against stated 3.8e-4 / 5.6e-4: the moving patch's samples)."""
-    from studies.calibration import FLOOR
+    from smfem.studies.calibration import FLOOR
 
     truth = _stored(name)
     if every > 1:

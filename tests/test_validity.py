@@ -1,4 +1,4 @@
-"""A run checks whether it stays inside the small-strain, small-rotation model (runs.validity)."""
+"""A run checks whether it stays inside the small-strain, small-rotation model (smfem.runs.validity)."""
 
 import json
 import math
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from cases import get_case
-from cli import main
-from runs.validity import LIMITS, check, field_gradients, smallest_dimension
+from smfem.cli import main
+from smfem.runs.validity import LIMITS, check, field_gradients, smallest_dimension
 
 
 def _box_field(u_of_x) -> meshio.Mesh:

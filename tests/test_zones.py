@@ -13,7 +13,7 @@ from smfem.inhomogeneity import cut_edges
 from smfem.options import SolverOptions
 from smfem.solver import solve
 from smfem.zones import along_x3
-from runs.zones import plastic_area
+from smfem.runs.zones import plastic_area
 
 
 def cells(value, x3, case):

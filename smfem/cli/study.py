@@ -1,0 +1,98 @@
+"""``smfem study CASE ...`` and ``smfem report``: series of runs, errors against the truth,
+work-precision; the report adds index.html and report.pdf (:mod:`reports.build`)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from .usage import UsageError, add_study_options, check_workers, check_writable
+
+
+def add(sub) -> None:
+    study = sub.add_parser("study", help="convergence and error-against-CPU-time study: tables/*.csv, figures/")
+    study.add_argument("cases", nargs="+", metavar="CASE")
+    add_study_options(study, "out/study")
+    _store_fronts(study)
+    study.set_defaults(handler=command)
+    report = sub.add_parser("report", help="the verification report: index.html, report.pdf, tables/*.csv")
+    add_study_options(report, "out/report")
+    _store_fronts(report)
+    report.add_argument("--publish", default=None, metavar="DIR",
+                        help="also keep tables/headline.csv, fronts.csv, carried.csv and run.json (wall time, machine, "
+                             "peak memory) in DIR: the findings README quotes (docs/full-report for --full)")
+    report.set_defaults(handler=command)
+
+
+def _store_fronts(parser) -> None:
+    parser.add_argument("--store-fronts", action="store_true",
+                        help="keep each scene's measured work-precision points (tables/fronts.csv) with its stored "
+                             "truth, as smfem/truths/CASE/front.csv: where smfem run --tol starts (a study: its scenes' only)")
+
+
+def command(args) -> int:
+    """1 if a run failed with an error (the outputs are written all the same), else 0."""
+    from smfem import api  # the reports load matplotlib, jinja2, dask: only when asked
+    from smfem.studies.executors import SchedulerUnreachable
+    from smfem.studies.jobs import FAILED
+
+    check_workers(args)
+    out = Path(args.out)
+    check_writable(out)
+    publish_to = getattr(args, "publish", None) and Path(args.publish)
+    if publish_to:
+        check_writable(publish_to, "--publish")
+    try:
+        make = api.report if args.command == "report" else api.study
+        report = make(out=out, full=args.full, scenes=tuple(getattr(args, "cases", ())), cache=args.cache,
+                      scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
+    except SchedulerUnreachable as exc:
+        raise UsageError(str(exc)) from None
+    for line in headline_lines(report.tables["headline"]):
+        print(line)
+    made = "index.html, report.pdf, " if args.command == "report" else ""
+    print(f"{args.command}: {len(report.study.executed)} runs executed, {report.study.cached} cached, "
+          f"{report.wall_time_s:.1f} s -> {out}/ ({made}tables/, figures/)")
+    if publish_to:
+        from reports.publish import publish
+
+        made = publish(report, publish_to, "full" if args.full else "quick", args.workers, args.scheduler)
+        print(f"{args.command}: published to {publish_to}/ (tables/, run.json: {made['wall_time_s']:.0f} s wall, "
+              f"largest run {made['peak_memory_mb']} MB)")
+    if getattr(args, "store_fronts", False):
+        from smfem.studies.stored import write_fronts
+
+        written = write_fronts(report.tables["fronts"])
+        print(f"{args.command}: fronts kept for {', '.join(written) or 'no scene (none measured against its stored truth)'}")
+    failed = [r for an in report.analyses for r in an.runs.all_runs() if r.status == FAILED]
+    for run in failed:
+        print(f"smfem: {run.job.describe()}: failed: {run.message}", file=sys.stderr)
+    return 1 if failed else 0
+
+
+def headline_lines(head) -> list[str]:
+    """The headline in a few short lines (the whole table is tables/headline.csv): per case and
+    target, SMFEM's cost with its cheaper element there and its speed-up over each other solver."""
+    from reports.verdict import cheapest, split_smfem
+
+    lines = []
+    width = max((len(c) for c in head.case), default=0)
+    for case, rows in head.groupby("case", sort=False):
+        mine, others_rows = split_smfem(rows.set_index("solver"))
+        for column in (c for c in rows.columns if c.startswith("cpu_s_to_")):
+            target = column.removeprefix("cpu_s_to_").replace("pct", " %")
+            best, cost = cheapest(mine, column)
+            if cost:
+                cost = f"{cost.group(1)} s CPU ({cost.group(2)})"
+            else:  # not reached: the first element's cell says how far it came
+                best = mine.index[0] if len(mine) else "smfem"
+                cost = str(mine.at[best, column]) if len(mine) else ""
+            others = []
+            for solver, row in others_rows.iterrows():
+                speedup = row.get(f"smfem_speedup_{column.removeprefix('cpu_s_to_')}")
+                if isinstance(speedup, str) and speedup:
+                    others.append(f"{solver} {speedup}")
+                elif str(row[column]).startswith("not available"):
+                    others.append(f"{solver} not available")
+            lines.append(f"{case:<{width}}  {target:>4}: {best} {cost}" + (f"; speed-up over {', '.join(others)}" if others else ""))
+    return lines

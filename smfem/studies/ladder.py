@@ -1,0 +1,93 @@
+"""Series carried to a target: a series with ``until`` (:class:`smfem.studies.plan.Until`) runs its
+levels one after another, cheapest first (by :func:`work`), and stops at its first run whose total error against
+the stored truth is at most the target, or before a level whose CPU time, predicted from the
+last run's, would pass the budget. Different series still run side by side.
+
+A series is carried only against a stored truth (``smfem/truths/CASE``): a truth the study computes
+is there only once every run has finished, so such a series runs all its levels.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from cases import get_case
+from smfem.runs.registry import lookup, with_fixed
+
+from . import metrics
+from .cache import Run
+from .jobs import Job
+from .plan import Series
+
+
+def work(params: dict, per_harmonic: bool) -> float:
+    """What a run's CPU time grows with, in the case's parameters: the section's (or body's)
+    elements, ``refine ** dim`` over ``coarsen ** dim``, the steps, ``t_end / dt``, and for a
+    harmonic solver the harmonics. An estimate for predicting a ladder's next run from its last
+    (direct solvers grow faster than this with a 3-D mesh, a plastic run with its iterations)."""
+    dim = params.get("dim", 2)
+    cells = (params.get("refine", 1) / params.get("coarsen", 1)) ** dim
+    harmonics = max(params.get("harmonics", 1), 1) if per_harmonic else 1
+    return cells * harmonics * params["t_end"] / params["dt"]
+
+
+@dataclass
+class Ladder:
+    """One carried series in a study: its jobs by level, how far it went and why it stopped."""
+
+    series: Series
+    case: object
+    truth: object
+    jobs: list[Job]
+    params: list[dict]
+    asked: int = 1
+    #: why the ladder stopped: '' while it runs; a sentence once it has
+    outcome: str = ""
+
+    @classmethod
+    def make(cls, series: Series, name: str, base: dict, truth, job) -> Ladder:
+        """The ladder of ``series``: its levels in the order of their predicted work
+        (:func:`work`; the plan's order among equals). ``job(solver, level, options)``: the
+        study's job of a level (:func:`smfem.studies.study.job_of`)."""
+        per_harmonic = lookup(series.solver).harmonics
+        params = [with_fixed(series.solver, get_case(name, {**base, **level})).params for level in series.levels]
+        order = sorted(range(len(params)), key=lambda i: work(params[i], per_harmonic))
+        return cls(series, get_case(name, base), truth,
+                   [job(series.solver, series.levels[i], series.options) for i in order], [params[i] for i in order])
+
+    @property
+    def running(self) -> list[Job]:
+        """The jobs asked so far, in level order."""
+        return self.jobs[:self.asked]
+
+    def after(self, job: Job, run: Run) -> list[Job]:
+        """The next job once ``run`` (of ``job``) has finished: none when it is not the
+        ladder's last asked level, when it reaches the target, when the ladder ends or when the
+        next level's predicted CPU time passes the budget (each said in :attr:`outcome`)."""
+        i = self.asked - 1
+        if self.outcome or job != self.jobs[i]:
+            return []
+        until = self.series.until
+        error = (metrics.headline_error(self.case, self.truth, run.history["t"].to_numpy(), run.history)
+                 if run.usable else math.nan)
+        cpu = run.summary.get("cpu_time_s", math.nan) if run.summary else math.nan
+        if error <= until.target:
+            self.outcome = f"reached {100 * until.target:g} % at {run.label} ({100 * error:.3g} %, {cpu:.3g} CPU s)"
+            return []
+        if self.asked == len(self.jobs):
+            self.outcome = f"ladder ended at {run.label} ({_percent(error)}): not reached"
+            return []
+        per_harmonic = lookup(self.series.solver).harmonics
+        predicted = cpu * work(self.params[i + 1], per_harmonic) / work(self.params[i], per_harmonic)
+        if predicted > until.budget_s:
+            label = self.jobs[i + 1].describe()
+            self.outcome = (f"stopped at {run.label} ({_percent(error)}): the next level ({label}) would take about "
+                            f"{predicted:.3g} CPU s, over the budget of {until.budget_s:g} s")
+            return []
+        self.asked += 1
+        return [self.jobs[i + 1]]
+
+
+def _percent(error: float) -> str:
+    return f"{100 * error:.3g} %" if math.isfinite(error) else "no error: the run failed"
