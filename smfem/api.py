@@ -3,10 +3,11 @@
 >>> import smfem
 >>> case = smfem.load("thick_cylinder", t_end=2e-4)        # a built-in scene, a .toml file or a Case
 >>> run = smfem.run(case)                                   # SMFEM, with its error estimate
->>> run.history.columns[:2].tolist()                        # a pandas DataFrame: t and each probe
-['t', 'inner_ur']
+>>> run.history.columns.tolist()                            # a pandas DataFrame: t and each probe
+['t', 'A_ur', 'B_ut', 'C_ur']
 >>> ref = smfem.run(case, solver="reference-2d", estimate=False)
->>> table = smfem.compare(run, ref)                         # per probe, relative difference
+>>> smfem.compare(run, ref).probe.tolist()                  # per probe, the relative difference
+['A_ur', 'B_ut', 'C_ur']
 
 Parameters of the scene and options of the solver go in as keywords, as ``--set`` does on the
 command line (docs/contract.md); a value out of range raises :class:`cases.ParameterError` with

@@ -38,6 +38,15 @@ def test_import_smfem_shows_the_interface_and_loads_no_framework_until_asked():
         smfem.nothing  # noqa: B018
 
 
+def test_the_interfaces_docstring_example_runs():
+    import doctest
+
+    import smfem.api
+
+    result = doctest.testmod(smfem.api)
+    assert result.attempted >= 6 and result.failed == 0
+
+
 def test_load_takes_a_name_a_scene_file_or_a_case_with_parameters():
     by_name = smfem.load("thick_cylinder", dt=1e-5)
     by_file = smfem.load(ROOT / "examples" / "thick_cylinder.toml", dt=1e-5)

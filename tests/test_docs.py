@@ -34,3 +34,10 @@ def test_the_architecture_names_every_package():
     assert all(f"{p}/" in text for p in ("smfem/cli", "reports", "smfem/studies", "smfem/runs", "smfem",
                                          "reference_fem", "cases", "smfem/truths"))
     assert "smfem/api.py" in text
+
+
+def test_every_name_of_the_python_interface_is_in_the_contract():
+    import smfem
+
+    text = (DOCS / "contract.md").read_text()
+    assert not [n for n in smfem.__all__ if n != "__version__" and f"smfem.{n}" not in text]

@@ -86,3 +86,15 @@ def test_the_published_page_is_what_its_tables_make(tmp_path):
     page(copy)
     expected = (copy / "README.md").read_text().replace(copy.as_posix(), "docs/full-report")
     assert (PUBLISHED / "README.md").read_text() == expected
+
+
+def test_the_readmes_scene_file_is_examples_pipe_toml_and_runs(tmp_path):
+    """The TOML block README shows is examples/pipe.toml without its comment lines, and it runs."""
+    import smfem
+
+    block = re.search(r"```toml\n(.*?)```", README, re.S).group(1)
+    lines = [x for x in (ROOT / "examples" / "pipe.toml").read_text().splitlines() if not x.startswith("#")]
+    assert block.strip() == "\n".join(lines).strip()
+    (tmp_path / "pipe.toml").write_text(block)
+    run = smfem.run(tmp_path / "pipe.toml", estimate=False, fields=False)
+    assert run.history.inner_ur.max() > 0  # the pressure inside pushes the wall out
