@@ -109,7 +109,8 @@ class Result:
     def summary(self) -> dict:
         """What ``summary.json`` holds: settings, dof, steps, CPU time (s), iterations, validity."""
         extra = {"error_estimate": self.error_estimate} if self.error_estimate else {}
-        return {**summary(self.case, family(self.solver), self.raw, self.wall_time_s), **self.extra, **extra}
+        checked = self.extra.get("validity")
+        return {**summary(self.case, family(self.solver), self.raw, self.wall_time_s, checked), **self.extra, **extra}
 
     @property
     def cpu_time_s(self) -> float:
@@ -212,12 +213,17 @@ def _solve(solver: str, case: Case, title: str, progress: bool, **options) -> Ru
         bar.close()
 
 
-def read(path: str | Path, fields: bool = True) -> Result:
-    """A run written by ``smfem run`` or :meth:`Result.write`, read back (built-in scenes and
-    scene files whose path is still valid)."""
+def read(path: str | Path, fields: bool = True, scene: str | Path | Case | None = None) -> Result:
+    """A run written by ``smfem run`` or :meth:`Result.write`, read back; ``scene``: the scene it
+    ran (default: the built-in scene of its name; give the file for a scene from a file), at
+    the parameters the run's summary.json records."""
     raw, written = read_run(Path(path), fields=fields)
-    params = {k: v for k, v in written["params"].items()}
-    case = get_case(written["case"], _overrides(written["case"], params))
+    params = dict(written["params"])
+    if scene is None:
+        case = get_case(written["case"], _overrides(written["case"], params))
+    else:
+        base = load(scene)
+        case = load(base, **{k: v for k, v in params.items() if base.params.get(k) != v})
     extra = {k: written[k] for k in ("validity", "options") if k in written}
     return Result(case, written["solver"], raw, float(written.get("wall_time_s", math.nan)),
                   written.get("error_estimate"), extra)

@@ -90,6 +90,12 @@ def test_written_and_read_back_the_run_is_the_same(short_run, tmp_path):
     back = smfem.read(out)
     pd.testing.assert_frame_equal(back.history, short_run.history, rtol=1e-9)
     assert back.case.params == short_run.case.params and back.estimate == pytest.approx(short_run.estimate)
+    # a scene from a file: read with its file
+    pipe = smfem.run(ROOT / "examples" / "pipe.toml", estimate=False, fields=False, t_end=1e-4)
+    again = smfem.read(pipe.write(tmp_path / "pipe"), scene=ROOT / "examples" / "pipe.toml")
+    assert again.case.params == pipe.case.params and again.summary["n_dof"] == pipe.summary["n_dof"]
+    with pytest.raises(ParameterError, match="unknown case 'pipe'"):
+        smfem.read(tmp_path / "pipe")
 
 
 def test_compare_two_solvers_and_the_error_against_the_stored_truth():

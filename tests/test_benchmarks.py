@@ -1,4 +1,4 @@
-"""Every benchmark script runs, at its tiny size, so none rots: the figures in README and
+"""Every benchmark script runs, at its tiny size, so none rots: the figures in docs/verification.md and
 benchmarks/README.md come from these scripts at full size."""
 
 from __future__ import annotations
