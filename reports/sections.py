@@ -1,18 +1,15 @@
 """The report's sections, built from the analyses; the template only lays them out.
 
-A section is a title and a list of blocks (paragraph, sub-heading, list, table, figure, link);
-:mod:`reports.outline` lists the builders in the document's order.
+A section is a title and a list of blocks (:mod:`reports.blocks`); :mod:`reports.outline` lists
+the builders in the document's order. A scene's section: :mod:`reports.scene`.
 """
 
 from __future__ import annotations
 
-import base64
 import os
 import platform
 from dataclasses import dataclass, field
 from pathlib import Path
-
-import pandas as pd
 
 from .analysis import FAMILIES, HEADLINE_MEASURE, CaseAnalysis
 from smfem.studies.calibration import FLOOR, SHARPNESS
@@ -20,19 +17,11 @@ from smfem.studies.cache import code_version
 from smfem.studies.effectivity import BAND
 from smfem.studies.effectivity import summary as effectivity_summary
 from smfem.studies.metrics import TARGETS, TRUTH_MARGIN
-from smfem.runs.registry import lookup
 from smfem.studies.plan import REFERENCE, SMFEM
 from smfem.studies.study import StudyResult
-from .tables import truth_table
+from .blocks import Section, figure, items, p, table
+from .scene import scene
 from .verdict import verdict
-
-
-@dataclass
-class Section:
-    id: str
-    title: str
-    blocks: list = field(default_factory=list)
-    css: str = ""
 
 
 @dataclass
@@ -49,33 +38,6 @@ class ReportContext:
     out: Path
     #: figures over every case (``effectivity``), relative to ``out``
     overall: dict = field(default_factory=dict)
-
-
-def p(text):
-    return {"kind": "p", "text": text}
-
-
-def h(text):
-    return {"kind": "h", "text": text}
-
-
-def items(values):
-    return {"kind": "list", "entries": list(values)}
-
-
-def table(df: pd.DataFrame):
-    html = df.to_html(index=False, na_rep="", border=0, escape=True,
-                      float_format=lambda x: f"{x:.4g}")
-    return {"kind": "table", "html": html}
-
-
-def figure(path: Path, caption: str):
-    data = base64.b64encode(Path(path).read_bytes()).decode()
-    return {"kind": "figure", "src": f"data:image/png;base64,{data}", "caption": caption}
-
-
-def link(href: str, text: str):
-    return {"kind": "link", "href": href, "text": text}
 
 
 def overview(ctx: ReportContext) -> list[Section]:
@@ -112,128 +74,32 @@ def verdict_section(ctx: ReportContext) -> list[Section]:
         items(verdict(ctx.tables["headline"])),
         p(f"Total error: {HEADLINE_MEASURE}, against each scene's truth; speed-ups are CPU-time ratios at "
           "the same error, on one thread ('more than': the other solver does not reach the target in this "
-          "study). The headline table below has every solver's cost; each case's section its "
-          "work-precision diagram and why."),
+          "study). Each scene's section has every solver's cost and its work-precision diagram."),
     ])]
 
 
-def _pct(target: float) -> str:
-    return f"{100 * target:g}pct"
-
-
 def headline(ctx: ReportContext) -> list[Section]:
+    """How to read every scene's headline rows, said once; the rows are in each scene's section."""
     names = " and ".join(f"{100 * t:g} %" for t in TARGETS)
-    blocks = [
-        p(f"Error measure: {HEADLINE_MEASURE}, against the case's truth (named in each row, with its "
+    targets = "; ".join(f"{f}: " + " and ".join(f"{100 * t:g} %" for t in ts) for f, (_, ts) in FAMILIES.items())
+    return [Section("headline", f"Headline: CPU time to {names} total error", [
+        p(f"Each scene's section opens with its verdict, its work-precision diagram and its headline rows, one per "
+          f"solver. Error measure: {HEADLINE_MEASURE}, against the scene's truth (named under its rows, with its "
           "uncertainty in the same measure). The CPU time is that of the cheapest run whose error is "
           "within the target, with its settings; 'not reached' gives the best error. A target below "
-          f"{TRUTH_MARGIN:g} times the truth's uncertainty is 'truth not fine enough': no run can be said to "
-          "reach it. SMFEM's speed-up is that solver's CPU time over SMFEM's at the same target ('>' when the "
-          "solver does not reach it even at its dearest run, '<' when SMFEM does not). CPU time is the "
-          "solve's process time (model building, factorization, time stepping), one thread."),
-        table(ctx.tables["headline"].drop(columns=["truth"]).rename(columns=_cost_labels(ctx.tables["headline"]))),
-        p("Truths: " + "; ".join(f"{an.case.name}: {an.truth.name} ({an.truth.source})" for an in ctx.analyses
-                                 if an.truth is not None) + "."),
-    ]
-    families = ctx.tables.get("stresses")
-    if families is not None and len(families):
-        targets = "; ".join(f"{f}: " + " and ".join(f"{100 * t:g} %" for t in ts) for f, (_, ts) in FAMILIES.items())
-        blocks += [h("Stresses and plastic strains, with their own targets"),
-                   p(f"The same columns for the probes outside the headline measure, each family judged on its own "
-                     f"(max over its probes of the relative max-norm error) and against its own targets ({targets}): "
-                     "a stress at a wave front or a plastic strain at a yielding point converges more slowly than "
-                     "a displacement."),
-                   table(families.rename(columns=_cost_labels(families)))]
-    return [Section("headline", f"Headline: CPU time to {names} total error", blocks)]
-
-
-def _cost_labels(df: pd.DataFrame) -> dict:
-    """Readable names of a costs table's columns (any targets)."""
-    out = {"truth_uncertainty_pct": "truth uncertainty, %", "best_error_pct": "best total error, %"}
-    for column in df.columns:
-        for prefix, text in (("cpu_s_to_", "CPU s to {} (settings)"), ("smfem_speedup_", "SMFEM speed-up at {}")):
-            if column.startswith(prefix):
-                out[column] = text.format(column[len(prefix):].replace("pct", " %"))
-    return out
-
-
-def _levels_table(an: CaseAnalysis) -> pd.DataFrame:
-    rows = []
-    for solver, s in an.solvers.items():
-        if len(s.points):
-            pts = s.points.assign(solver=solver, front=s.points.label.isin(s.front))
-            rows.append(pts[["solver", "label", "n_dof", "dt", "cpu", "total", "spatial", "front"]])
-    if not rows:
-        return pd.DataFrame()
-    out = pd.concat(rows, ignore_index=True)
-    out[["total", "spatial"]] *= 100
-    return out.rename(columns={"label": "level", "cpu": "cpu_time_s", "total": "total error, %",
-                               "spatial": "same-dt difference, %", "front": "on the front"})
-
-
-def _truth_blocks(an: CaseAnalysis) -> list:
-    t = an.truth
-    if t is None:
-        return [p("No truth: " + ("no truth plan" if an.runs.study.truth is None else
-                                  "a run it needs has no history") + ".")]
-    df = truth_table([an]).drop(columns=["case", "method", "truth", "source", "cpu_time_s"])
-    blocks = [h("Truth"), p(f"{t.name}; {t.source}. CPU time {t.cpu_time_s:.3g} s over {len(t.levels)} runs. "
-                            f"Uncertainty in the headline measure: {100 * an.truth_uncertainty:.2g} %."), table(df)]
-    cal = (t.calibration or {}).get("probes")
-    if cal:
-        rows = pd.DataFrame([{"probe": probe, "uncertainty, %": 100 * c["uncertainty"],
-                              "second path's uncertainty, %": 100 * c["second_uncertainty"],
-                              "distance, %": 100 * c["distance"], "covered": c["covered"], "sharp": c["sharp"],
-                              "widened": c.get("widened", False)}
-                             for probe, c in cal.items()])
-        blocks += [p(f"Calibration: the same truth made on a second, independent path ({t.calibration['second_path']}). "
-                     f"Covered: the distance between the two is within the sum of their uncertainties; sharp: the "
-                     f"truth's uncertainty is at most {SHARPNESS:g} times the distance (or {100 * FLOOR:.3g} %); widened: the "
-                     f"truth's own uncertainty did not cover the distance, so it is stated as the distance plus the "
-                     f"second path's uncertainty."),
-                   table(rows)]
-    return blocks
-
-
-def _case(ctx: ReportContext, an: CaseAnalysis) -> Section:
-    name, figs = an.case.name, ctx.figures.get(an.case.name, {})
-    blocks = [p(an.case.title)]
-    refused = [f"{s}: {v.status}: {v.message}" for s, v in an.solvers.items() if v.status != "ok"]
-    if refused:
-        blocks.append(items(refused))
-    if not an.available:
-        return Section(name, name, blocks, css="case")
-    blocks += _truth_blocks(an)
-    if "work_precision" in figs:
-        blocks.append(figure(ctx.out / figs["work_precision"], f"{name}: work-precision diagram (total error)"))
-    if an.runs.carried:
-        blocks += [p("Series carried along their ladders (cheapest level first, smfem/studies/ladder.py):"),
-                   items([f"{lookup(s).label}: {outcome}" for s, outcome in an.runs.carried.items()])]
-    blocks += [h("Every run: total error against the truth, and the same-dt difference"), table(_levels_table(an))]
-    if len(an.orders):
-        blocks += [h("Observed orders of the headline measure (log-log fit)"),
-                   table(an.orders.drop(columns=["case"]))]
-    if "spatial" in figs:
-        ref = an.reference.name if an.reference else "none"
-        blocks += [h(f"The paper's comparison: at the case's time step, against {ref}"),
-                   figure(ctx.out / figs["spatial"], f"{name}: same-dt difference against CPU time")]
-    if len(an.published):
-        finest = an.published.groupby("solver", sort=False)["level"].transform("last") == an.published["level"]
-        blocks += [h(f"Against the published extrema ({an.published.source.iloc[0]}), last level of each solver"),
-                   table(an.published[finest].drop(columns=["case", "source"]))]
-    if "histories" in figs:
-        blocks.append(figure(ctx.out / figs["histories"], f"{name}: probe histories (truth and each solver's most "
-                                                            "accurate run)"))
-    if "plastic_zones" in figs:
-        blocks.append(figure(ctx.out / figs["plastic_zones"],
-                             f"{name}: SMFEM plastic zones (equivalent plastic strain >= 0.1 %) at the paper's times"))
-    if "field" in figs:
-        blocks.append(figure(ctx.out / figs["field"], f"{name}: synthesized 3-D field of SMFEM at the final time"))
-    if "vtu" in figs:
-        blocks.append(link(figs["vtu"], f"{figs['vtu']} (open in ParaView)"))
-    if "pvd" in figs:
-        blocks.append(link(figs["pvd"], f"{figs['pvd']} (the time series: open in ParaView and play)"))
-    return Section(name, f"Case {name}", blocks, css="case")
+          f"{TRUTH_MARGIN:g} times the truth's uncertainty is 'truth not fine enough': no run can be said to reach it. "
+          "SMFEM's speed-up is that solver's CPU time over SMFEM's at the same target ('>' when the solver does not "
+          "reach it even at its dearest run, '<' when SMFEM does not). CPU time is the solve's process time (model "
+          "building, factorization, time stepping), one thread. A reason in a cell is a numbered note under its "
+          "table."),
+        p("Stresses and plastic strains have rows of their own in each scene, outside the headline measure: each "
+          "family judged on its own (max over its probes of the relative max-norm error) and against its own "
+          f"targets ({targets}): a stress at a wave front or a plastic strain at a yielding point converges more "
+          "slowly than a displacement. Where every solver gives the same answer for a probe group (no converged "
+          "truth, say), it is one row."),
+        items(["every scene and solver: tables/headline.csv and tables/stresses.csv",
+               "every run, order, published extremum and the truth per probe: the appendix, and tables/*.csv"]),
+    ])]
 
 
 def estimates(ctx: ReportContext) -> list[Section]:
@@ -259,8 +125,8 @@ def estimates(ctx: ReportContext) -> list[Section]:
     ]
     if ctx.overall.get("effectivity"):
         blocks.append(figure(ctx.out / ctx.overall["effectivity"], "Effectivity per scene, solver and setting"))
-    blocks.append(table(shown[columns].round(4)))
-    return [Section("estimates", "Error estimates against the truth", blocks)]
+    return [Section("estimates", "Error estimates against the truth", blocks,
+                    appendix=[table(shown[columns].round(4))])]
 
 
 def code_verification(ctx: ReportContext) -> list[Section]:
@@ -289,13 +155,13 @@ def code_verification(ctx: ReportContext) -> list[Section]:
           "theory." + ("" if off.empty else " Outside: " + "; ".join(
               f"{r.solver} {r.body} {r.parameter} {r.probe} ({r.observed_order:.2f})" for r in off.itertuples()))),
         *[figure(path, f"Code verification: {path.stem.removeprefix('verification-')}") for path in figures],
-        table(rows.drop(columns=[c for c in ("differences", "too_few_over_all") if c in rows])),
     ]
-    return [Section("code-verification", "Code verification: manufactured solutions", blocks)]
+    return [Section("code-verification", "Code verification: manufactured solutions", blocks,
+                    appendix=[table(rows.drop(columns=[c for c in ("differences", "too_few_over_all") if c in rows]))])]
 
 
 def cases(ctx: ReportContext) -> list[Section]:
-    return [_case(ctx, an) for an in ctx.analyses]
+    return [scene(ctx, an) for an in ctx.analyses]
 
 
 def methods(ctx: ReportContext) -> list[Section]:
@@ -324,6 +190,10 @@ def methods(ctx: ReportContext) -> list[Section]:
         "correction) and says so. Each stored truth is calibrated against a second, independent path (the "
         "explicit reference for a modal truth, the other element for the notched scenes, implicit Newmark with "
         "Lagrange-multiplier contact for the rod).",
+        "Calibration (a stored truth's table in the appendix): covered: the distance between the truth and the "
+        "second path is within the sum of their uncertainties; sharp: the truth's uncertainty is at most "
+        f"{SHARPNESS:g} times the distance (or {100 * FLOOR:.3g} %); widened: the truth's own uncertainty did not "
+        "cover the distance, so it is stated as the distance plus the second path's uncertainty.",
         "Same-dt comparison (the paper's): runs at the case's time step against the finest reference run "
         "at that time step, or an analytic history where it is exact (the 1-D rod theory for nu = 0).",
         "Published extrema: the computed extremum of the same kind between the midpoints to the "
@@ -336,7 +206,7 @@ def methods(ctx: ReportContext) -> list[Section]:
         "mesh with serendipity elements (CPE8 / CAX8), from the deck 'smfem export' writes; Newmark with "
         "ALPHA = 0 at the case's dt (plastic scenes: ccx's own increments of at most dt, interpolated onto "
         "the dt grid); its plastic strains are nodal PEEQ (accumulated), not the cases' sqrt(2/3 eps_p:eps_p). "
-        "Its CPU time is ccx's own. A scene with a rigid wall is not solved (the case's section says why).",
+        "Its CPU time is ccx's own. A scene with a rigid wall is not solved (the scene's rows say why).",
         "Observed order: slope of log(error) against log(h), h = dt at a fixed mesh, or dof^(-1/2) at the "
         "case's time step. An order near zero or negative means the refined parameter does not limit the "
         "error there (at a fixed mesh, the space error dominates; the orders table says so per row).",

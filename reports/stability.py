@@ -10,7 +10,7 @@ import pandas as pd
 
 from smfem.studies.cache import code_version
 from smfem.studies.plan import REFERENCE, SMFEM
-from .sections import Section, items, p, table
+from .blocks import Section, items, p, table
 
 #: studies that carry the section (the tests' tiny study does not)
 WITH_STABILITY = ("quick", "full")
@@ -47,6 +47,5 @@ def stability(ctx) -> list[Section]:
         p(f"{len(rows) - len(failed)} of {len(rows)} figures within their limits."
           + ("" if failed.empty else " Outside: " + "; ".join(f"{r.check}, {r.setting}" for r in failed.itertuples())
              + " (the thin dome at 4 x 20 cannot resolve the clamped edge's bending layer beyond R/h = 150).")),
-        table(rows),
-    ])]
+    ], appendix=[table(rows)])]
 

@@ -199,6 +199,102 @@ def test_html_is_self_contained_and_the_pdf_has_pages_and_text(tiny):
         assert needle in text
 
 
+#: the tiny report's PDF: 10 pages measured (A4, DejaVu Sans), 13 before each scene's per-run
+#: tables went to the appendix
+TINY_PAGES = 11
+
+
+def _pages(pdf) -> list[str]:
+    """Each page's text, its whitespace (line breaks in table cells) one space, and a name broken
+    at its hyphen in a narrow cell (``smfem-`` / ``quad9``) whole."""
+    from pypdf import PdfReader
+
+    return [" ".join(page.extract_text().split()).replace("- ", "-") for page in PdfReader(pdf).pages]
+
+
+def test_each_scene_opens_with_its_verdict_figure_and_headline_rows_on_a_page_or_two(tiny):
+    """A reader paging through the PDF: every scene's heading opens a page, and its verdict
+    sentence, work-precision figure and headline rows (each solver's CPU to the first target)
+    follow within that page and the next, before the next scene; the whole within a bound."""
+    from reports.verdict import verdict
+
+    pages = _pages(tiny.out / "report.pdf")
+    assert len(pages) <= TINY_PAGES, len(pages)
+    names = [an.case.name for an in tiny.analyses]
+    starts = [next(i for i, text in enumerate(pages) if text.startswith(f"Case {name} ")) for name in names]
+    assert starts == sorted(starts)
+    head = pd.read_csv(tiny.out / "tables" / "headline.csv")
+    sentences = dict(zip(names, verdict(head)))
+    for name, start, end in zip(names, starts, starts[1:] + [len(pages)]):
+        shown = " ".join(pages[start:min(start + 2, end)])
+        assert " ".join(sentences[name].split())[:80].replace("- ", "-") in shown, name
+        assert f"{name}: work-precision diagram" in shown, name
+        for row in head[head.case == name].itertuples():  # '0.0232 (r2 H1 ...)', 'not available: why' as a note
+            assert f"{row.solver} {row.cpu_s_to_1pct.split(' (')[0].split(':')[0]}" in shown, (name, row.solver)
+
+
+def test_the_appendix_holds_the_per_run_tables_and_the_scenes_do_not(tiny):
+    """Every run, the orders and the truth per probe are in the appendix, after every section,
+    one part per scene; a scene's section holds none of them and links to its part."""
+    html = (tiny.out / "index.html").read_text(encoding="utf-8")
+    pages = _pages(tiny.out / "report.pdf")
+    appendix = html.index('<section id="appendix"')
+    assert html.rindex('<section id="methods"') < appendix
+    fronts = pd.read_csv(tiny.out / "tables" / "fronts.csv")
+    for an in tiny.analyses:
+        name = an.case.name
+        section = html[html.index(f'<section id="{name}"'):]
+        section = section[:section.index("</section>")]
+        part = html[html.index(f'<section id="appendix-{name}"'):]
+        part = part[:part.index("</section>")]
+        for heading in ("Every run: total error", "Observed orders", "The truth per probe"):
+            assert heading not in section and heading in part, (name, heading)
+        assert f'href="#appendix-{name}"' in section
+        every_run = part[part.index("<table"):part.index("</table>")]
+        assert every_run.count("<tr") - 1 == (fronts.case == name).sum()  # a row per run, and the header
+    first = next(i for i, text in enumerate(pages) if text.startswith("Appendix: the tables behind each section"))
+    assert all("Every run: total error" not in text for text in pages[:first])
+    assert sum(text.count("Every run: total error") for text in pages[first:]) == len(tiny.analyses)
+
+
+def test_a_reason_in_a_cell_is_said_once_under_its_table(tiny):
+    """A reason repeated in a table's cells becomes a marker and one numbered note: the orders'
+    'flat: ...' (three dome rows, two thick cylinder ones: once under each table) in the report,
+    CalculiX's long reason in a scene's headline rows, and a probe group where every solver has
+    no converged truth as one row; the CSV tables keep every cell whole."""
+    import html as markup
+
+    from reports.blocks import Section, table
+    from reports.document import render_html
+    from reports.scene import EVERY_SOLVER, family_rows, headline_rows
+
+    flat = "flat: the error is not limited by the step here, another error dominates"
+    orders = pd.read_csv(tiny.out / "tables" / "orders.csv")
+    assert (orders.reading == flat).sum() == 5
+    html = markup.unescape((tiny.out / "index.html").read_text(encoding="utf-8"))
+    assert html.count(flat) == 2 and html.count("<td>flat (1)</td>") == 5
+
+    why = ("not available: a rigid wall is not solved: in ccx 2.20's implicit dynamics its contact pairs cut the "
+           "increment to nothing")
+    none = "no converged truth: singular probes (truth.csv says why)"
+    costs = {"truth_uncertainty_pct": 0.5, "runs": 1, "smfem_speedup_1pct": "", "smfem_speedup_5pct": ""}
+    head = pd.DataFrame([{"case": "rod", "solver": SMFEM, "best_error_pct": 0.6, "cpu_s_to_1pct": "0.3 (r1)",
+                          "cpu_s_to_5pct": "0.3 (r1)", **costs},
+                         {"case": "rod", "solver": CALCULIX, "best_error_pct": math.nan, "cpu_s_to_1pct": why,
+                          "cpu_s_to_5pct": "not available", **costs}])
+    stresses = pd.DataFrame([{"case": "rod", "family": "stress", "probes": "mid_szz contact_p", "solver": solver,
+                              "truth_uncertainty_pct": math.nan, "best_error_pct": math.nan,
+                              "cpu_s_to_5pct": none, "cpu_s_to_10pct": none, "smfem_speedup_5pct": "",
+                              "smfem_speedup_10pct": ""} for solver in (SMFEM, SMFEM_QUAD9, REF2D, REF3D)])
+    rows = family_rows(stresses, "rod", [SMFEM, SMFEM_QUAD9, REF2D, REF3D])
+    assert len(rows) == 1 and rows.solver.iloc[0] == EVERY_SOLVER
+    blocks = [table(headline_rows(head, "rod")), table(rows)]
+    assert [b["notes"] for b in blocks] == [[why], [none]]
+    page = markup.unescape(render_html([Section("rod", "Case rod", blocks)], "t", "s"))
+    assert page.count(why) == 1 and "<td>not available (1)</td>" in page
+    assert page.count(none) == 1 and page.count("<td>no converged truth (1)</td>") == 2
+
+
 def test_a_rebuilt_report_runs_nothing_new(tiny, tmp_path):
     again = build(TINY, tmp_path / "again", cache=tiny.out / "runs", progress=False, document=False)
     assert again.study.executed == [] and again.study.cached == tiny.study.cached + len(tiny.study.executed)
