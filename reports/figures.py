@@ -82,7 +82,9 @@ def _log_axes(ax) -> None:
 def _label_points(ax, labels) -> None:
     """Each solver's points labelled clear of each other (those with no free spot left out, and
     said so)."""
-    left_out = sum(place_labels(ax, x, y, names, color) for x, y, names, color in labels)
+    if labels:
+        ax.figure.canvas.draw()  # once: the labels take no part in the layout
+    left_out = sum(place_labels(ax, x, y, names, color, drawn=True) for x, y, names, color in labels)
     if left_out:
         ax.annotate(f"{left_out} point labels left out (no free spot)", (0.01, 0.01), xycoords="axes fraction",
                     fontsize=6, color="0.4")

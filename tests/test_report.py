@@ -306,7 +306,9 @@ def test_a_rebuilt_report_runs_nothing_new(tiny, tmp_path):
 def test_damaged_cache_entries_are_run_again_and_the_report_is_unchanged(tiny, tmp_path, capsys):
     """Three entries damaged as a disk or a hand might: a summary.json that is not JSON, a
     history.csv cut short (the run's error would move), a history.csv gone (the run would
-    vanish). Each is named on one line, run again, and the tables equal the undamaged ones."""
+    vanish). Each is named on one line, run again, and the tables equal the undamaged ones.
+    The damaged entries are the dome's, so the dome's study alone is built again (the thick
+    cylinder's cached runs would add their figures, not a check): its rows of the tables."""
     cache = tmp_path / "runs"
     shutil.copytree(tiny.out / "runs", cache)
     entries = sorted(p.parent for p in (cache / "dome" / SMFEM).glob("*/history.csv"))[:3]
@@ -315,7 +317,8 @@ def test_damaged_cache_entries_are_run_again_and_the_report_is_unchanged(tiny, t
     (entries[1] / "history.csv").write_text("\n".join(lines[: len(lines) // 2]) + "\n")
     (entries[2] / "history.csv").unlink()
     capsys.readouterr()
-    again = build(TINY, tmp_path / "again", cache=cache, progress=False, document=False)
+    dome = TINY[:1]
+    again = build(dome, tmp_path / "again", cache=cache, progress=False, document=False)
     err = capsys.readouterr().err
     assert len(again.study.executed) == 3, again.study.executed
     for damage in ("summary.json differs from its checksum", "history.csv differs from its checksum",
@@ -323,11 +326,13 @@ def test_damaged_cache_entries_are_run_again_and_the_report_is_unchanged(tiny, t
         assert err.count(damage) == 1, err
     for table in ("errors.csv", "headline.csv"):  # all but a rerun's own CPU time
         first, second = (pd.read_csv(d / "tables" / table) for d in (tiny.out, tmp_path / "again"))
+        first = first[first.case == "dome"].reset_index(drop=True)
         timed = [c for c in first if "cpu" in c or "wall" in c or "speedup" in c]
+        assert len(second) == len(first) > 0
         pd.testing.assert_frame_equal(first.drop(columns=timed), second.drop(columns=timed))
     assert all((e / "history.csv").exists() and (e / "summary.json").exists() for e in entries)
     # and the entries stand repaired: a third build runs nothing
-    assert build(TINY, tmp_path / "third", cache=cache, progress=False, document=False).study.executed == []
+    assert build(dome, tmp_path / "third", cache=cache, progress=False, document=False).study.executed == []
 
 
 def test_study_on_a_dask_local_cluster_matches_the_local_processes_and_carries_a_ladder(tiny, tmp_path,

@@ -9,6 +9,7 @@ for the next outcome.
 from __future__ import annotations
 
 import multiprocessing
+import os
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
 from smfem.runs.registry import lookup
@@ -27,24 +28,51 @@ class _Feed:
         return jobs
 
 
+#: the local worker processes, kept between studies of one session (each spawned process
+#: imports numpy, scipy, the solvers: one to three CPU seconds before its first job)
+_pool: tuple[tuple, ProcessPoolExecutor] | None = None
+
+
+def _workers(count: int) -> ProcessPoolExecutor:
+    """The session's pool of ``count`` spawned processes; a pool of another size, one whose
+    process died, or one spawned under other environment variables (``SMFEM_THREADS``,
+    ``SMFEM_CCX``: a process reads them from the environment it was started with) is shut
+    down and replaced."""
+    global _pool
+    key = (count, tuple(sorted(os.environ.items())))
+    if _pool is not None and (_pool[0] != key or _pool[1]._broken):
+        _pool[1].shutdown(wait=True, cancel_futures=True)
+        _pool = None
+    if _pool is None:
+        _pool = (key, ProcessPoolExecutor(max_workers=count, mp_context=multiprocessing.get_context("spawn")))
+    return _pool[1]
+
+
 def local(queue: list[Job], workers: int):
-    """Run the jobs of ``queue`` on ``workers`` fresh processes (spawned: a forked child would
-    inherit the parent's thread pools); each pins its BLAS threads in
-    :func:`~smfem.studies.jobs.execute`. Each job goes with its solver's entry: a solver registered
-    here is not in a fresh process's table."""
+    """Run the jobs of ``queue`` on ``workers`` processes, spawned (a forked child would
+    inherit the parent's thread pools) once in a session and kept for the next study; each
+    pins its BLAS threads in :func:`~smfem.studies.jobs.execute`. Each job goes with its
+    solver's entry: a solver registered here is not in a spawned process's table. Left early
+    (the caller stops iterating, or an error), the jobs not started are cancelled and the
+    running ones finish before it returns, as they did when each study had its own pool."""
     feed = _Feed(queue)
-    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        pending = {}
+    pool = _workers(workers)
+    pending = {}
 
-        def submit():
-            pending.update({pool.submit(execute, job, lookup(job.solver)): job for job in feed.new()})
+    def submit():
+        pending.update({pool.submit(execute, job, lookup(job.solver)): job for job in feed.new()})
 
+    try:
         submit()
         while pending:
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in done:
                 yield pending.pop(future), future.result()
                 submit()
+    finally:
+        for future in pending:
+            future.cancel()
+        wait(pending)
 
 
 class SchedulerUnreachable(OSError):
