@@ -53,7 +53,8 @@ def publish(report, directory: Path, settings: str, workers: int, scheduler: str
     memory = pd.to_numeric(runs.get("peak_memory_mb", pd.Series(dtype=float)), errors="coerce")
     largest = runs.loc[memory.idxmax()] if memory.notna().any() else None
     made = {
-        "command": f"smfem report --{settings}" + (f" --scheduler {scheduler}" if scheduler else f" --workers {workers}"),
+        "command": "smfem report" + (" --full" if settings == "full" else "")
+                   + (f" --scheduler {scheduler}" if scheduler else f" --workers {workers}"),
         "finished": time.strftime("%Y-%m-%d %H:%M:%S %Z"),
         "wall_time_s": round(report.wall_time_s, 1),
         "runs_executed": len(report.study.executed),

@@ -436,9 +436,12 @@ def test_published_findings_are_the_reports_tables_with_its_time_machine_and_pea
     for name in PUBLISHED:
         assert (tmp_path / "pub" / "tables" / f"{name}.csv").read_bytes() == (tiny.out / "tables" / f"{name}.csv").read_bytes()
     assert json.loads((tmp_path / "pub" / "run.json").read_text()) == made
-    assert made["command"] == "smfem report --quick --workers 2" and made["machine"]["cpus"] >= 1
+    assert made["command"] == "smfem report --workers 2" and made["machine"]["cpus"] >= 1
     assert made["peak_memory_mb"] == pytest.approx(runs.peak_memory_mb.max(), abs=0.1)
     assert made["runs_executed"] == len(tiny.study.executed) and made["wall_time_s"] > 0
+    page = (tmp_path / "pub" / "README.md").read_text()  # the page made of them, and its figure
+    assert "`smfem report --workers 2 --publish" in page and "\n| dome | " in page
+    assert (tmp_path / "pub" / "work-precision.png").stat().st_size > 10_000
 
 
 def test_user_mistakes_in_report_commands_exit_2(tmp_path, capsys):
