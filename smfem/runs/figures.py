@@ -17,6 +17,10 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
+#: the resolution figures are made, checked and written at, dots per inch
+DPI = 120
+matplotlib.rcParams["figure.dpi"] = DPI
+import matplotlib.image  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
@@ -35,14 +39,16 @@ class FigureLayoutWarning(UserWarning):
     """A figure's text is cut off, hidden under another label or a marker, or an axis has no unit."""
 
 
-def save(fig, path: Path, dpi: int = 120) -> Path:
-    """Check the layout (a warning per problem), write the figure and close it. The check runs
-    at the resolution the labels were placed at: written from its own drawing at another one,
-    text rendered at the new size touched markers the placement had kept clear of (the quick
-    report's point labels, 2026-11-27)."""
+def save(fig, path: Path, dpi: int = DPI) -> Path:
+    """Check the layout at the resolution written (a warning per problem), write the figure
+    (PNG) from the drawing the check made and close it: ``savefig`` would lay the figure out
+    and draw it twice more, a third of a figure's CPU time. Figures are made at :data:`DPI`, so
+    point labels are placed at the resolution they are checked and written at (placed at
+    another, text rendered at the new size touched markers the placement had kept clear of)."""
+    fig.set_dpi(dpi)
     for problem in layout_problems(fig):
         warnings.warn(f"{Path(path).name}: {problem}", FigureLayoutWarning, stacklevel=2)
-    fig.savefig(path, dpi=dpi)
+    matplotlib.image.imsave(path, fig.canvas.buffer_rgba(), format="png", origin="upper", dpi=dpi)
     plt.close(fig)
     return path
 
