@@ -49,6 +49,11 @@ def _pct_text(error_pct: float) -> str:
     return f"{error_pct:.2g} %" if math.isfinite(error_pct) else "no error measured"
 
 
+def _best(mine: pd.DataFrame) -> float:
+    """SMFEM's smallest error over its elements' rows, %; NaN where none was measured."""
+    return min((e for e in mine.best_error_pct if math.isfinite(e)), default=math.nan)
+
+
 def split_smfem(rows: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Headline rows (indexed by solver) as SMFEM's series (one per element) and the others."""
     is_mine = [lookup(s).family == SMFEM for s in rows.index]
@@ -71,7 +76,7 @@ def sentence(case: str, rows: pd.DataFrame) -> str:
     first = [str(c) for c in mine[f"cpu_s_to_{_pct(TARGETS[0])}"]]
     if all(c.startswith("not available") for c in first):
         return f"{case}: SMFEM cannot run this scene ({first[0]})."
-    best = min((e for e in mine.best_error_pct if math.isfinite(e)), default=math.nan)
+    best = _best(mine)
     for target in TARGETS:
         solver, cost = cheapest(mine, f"cpu_s_to_{_pct(target)}")
         if cost:
@@ -116,7 +121,7 @@ def summary_table(head: pd.DataFrame, vs=(("reference-2d", "2D FEM"), ("referenc
         mine, others = split_smfem(rows)
         reached = next(((t, c) for t in TARGETS if (c := cheapest(mine, f"cpu_s_to_{_pct(t)}")[1])), None)
         if reached is None:
-            best = min((e for e in mine.best_error_pct if math.isfinite(e)), default=math.nan)
+            best = _best(mine)
             lines.append(f"| {case} | no target (best {_pct_text(best)}) | - | " + " | ".join("-" for _ in vs) + " |")
             continue
         target, cost = reached

@@ -27,14 +27,19 @@ def reset_peak() -> bool:
         return False
 
 
+def _high_water_mark() -> int | None:
+    """This process's resident high-water mark, bytes, from /proc (the one :func:`reset_peak`
+    resets; getrusage's never falls); None where /proc does not say."""
+    try:
+        line = next(x for x in _STATUS.read_text().splitlines() if x.startswith("VmHWM:"))
+        return int(line.split()[1]) * 1024
+    except (OSError, StopIteration, ValueError):
+        return None
+
+
 def peak_mb() -> float:
     """The peak resident memory, MB (10^6 bytes), of this process since :func:`reset_peak` and
     of its largest child process so far."""
-    own = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * _RUSAGE_UNIT
-    try:
-        line = next(x for x in _STATUS.read_text().splitlines() if x.startswith("VmHWM:"))
-        own = int(line.split()[1]) * 1024
-    except (OSError, StopIteration, ValueError):
-        pass
+    own = _high_water_mark() or resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * _RUSAGE_UNIT
     children = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * _RUSAGE_UNIT
     return max(own, children) / 1e6
