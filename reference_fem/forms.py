@@ -112,9 +112,10 @@ def internal_forces(B: sp.csr_matrix, weights: np.ndarray, sigma: np.ndarray) ->
 
 
 @BilinearForm
-def mass(u, v, w):
-    """Consistent mass ``rho u . v``, times the radius ``w.weight`` when axisymmetric."""
-    return w.rho * dot(u, v) * w.weight
+def scalar_mass(u, v, w):
+    """``rho u v`` of scalar functions, times the radius ``w.weight`` when axisymmetric: each
+    component's block of the consistent mass ``rho u . v`` (:func:`reference_fem.mass.consistent_mass`)."""
+    return w.rho * u * v * w.weight
 
 
 @LinearForm

@@ -116,8 +116,15 @@ class Model:
 
     def stiffness(self) -> sp.csr_matrix:
         """Elastic stiffness (N/m, or N/m per radian when axisymmetric)."""
-        weights = self.weights if self.factor is None else self.weights * self.factor
-        return forms.stiffness(self.B, weights, self.D)
+        return forms.stiffness(self.B, self._stiffness_weights(), self.D)
+
+    def stiffness_times(self, x: np.ndarray) -> np.ndarray:
+        """``K x`` (full dofs) without forming ``K``: ``B^T (w D) B x``, two products with ``B``
+        (a probe's row of K: forming K again for it cost 2.9 of a 3D rod run's 20 CPU s)."""
+        return self.B.T @ (forms.material_blocks(self.D, self._stiffness_weights()) @ (self.B @ x))
+
+    def _stiffness_weights(self) -> np.ndarray:
+        return self.weights if self.factor is None else self.weights * self.factor
 
     def edge_facets(self, edge: str) -> np.ndarray:
         """Boundary facets on a named (or parametric) section edge."""

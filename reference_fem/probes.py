@@ -93,7 +93,7 @@ class Probes:
         e = np.zeros((model.basis.N // model.dim, model.dim))
         e[face.nodes] = face.normals
         e = e.ravel() / face.area
-        k_row, m_row = (sp.csr_matrix(e @ X) for X in (model.stiffness(), model.M))
+        k_row, m_row = sp.csr_matrix(model.stiffness_times(e)), sp.csr_matrix(e @ model.M)  # K, M symmetric
         q = e @ model.Q
         return lambda u, v, a, s: (k_row @ u + m_row @ a)[0] - q
 
