@@ -168,8 +168,10 @@ def test_every_case_of_the_quick_report_has_a_truth():
         assert all(len(d) >= fewest.get(solver, 3) for solver, d in dts.items()), (study.case, dts)
         calculix = [s.levels for s in study.series if s.solver == CALCULIX]
         # ... nor the loads issue's scenes (48 and 123 CPU s in ccx: the full report's), nor the
-        # layered cylinder since the contact scenes came in (44 CPU s)
-        later = notched or study.case in ("flywheel", "layered_cylinder", "layered_cylinder_pulse", "moving_load")
+        # layered cylinder since the contact scenes came in (44 CPU s), nor the thick cylinder
+        # since the report ran on a slower machine (64 CPU s for 11 %, neither target)
+        later = notched or study.case in ("flywheel", "layered_cylinder", "layered_cylinder_pulse", "moving_load",
+                                          "thick_cylinder")
         assert calculix == ([] if later else [({},)])
 
 

@@ -111,7 +111,9 @@ class Run:
         text += f" {p['time_scheme']}" if p.get("time_scheme", "newmark") != "newmark" else ""  # gauss
         text += f" N{p['theta_elements']}" if p.get("theta_elements") else ""  # elements round a 3D ring
         text += " half" if p.get("mirror") else ""
-        return text + "".join(f" {k}" if v is True else f" {k} {v}" for k, v in self.job.options)
+        # an option named by its key when it is a switch (bbar), by its value when a word (superlu)
+        return text + "".join(f" {k}" if v is True else f" {v}" if isinstance(v, str) else f" {k} {v}"
+                              for k, v in self.job.options)
 
     @property
     def usable(self) -> bool:
