@@ -9,19 +9,22 @@ from pathlib import Path
 
 import pandas as pd
 
-from smfem.runs import zones
+from smfem.runs import threads, zones
 from smfem.runs.figures import plastic_zones
 from smfem.runs.registry import lookup
 
 from . import figures
 from .analysis import CaseAnalysis, analyse
 from smfem.studies.cache import RunCache
+from smfem.studies.executors import in_worker
 from .document import render_html, write_pdf
 from .outline import build_sections
 from .sections import ReportContext
 from smfem.studies.study import StudyResult, run_study
 from .tables import write_tables
 from .view3d import render_field
+from . import verification
+from .stability import WITH_STABILITY, stability_rows
 
 TITLE = "SMFEM verification report"
 
@@ -77,6 +80,22 @@ def _zone_rows(an: CaseAnalysis) -> dict[str, list[dict]]:
             if run is not None and run.path is not None and (run.path / "plastic_zones.npz").exists()}
 
 
+def code_verification_table(cache_dir: Path, settings: str) -> None:
+    """Make (or find) the cached code verification table of a ``settings`` report."""
+    threads.pin()
+    verification.cached(cache_dir, quick=settings != "full")
+
+
+def stability_table(cache_dir: Path, settings: str) -> None:
+    """Make (or find) the cached stability table."""
+    threads.pin()
+    stability_rows(cache_dir)
+
+
+#: the report's tables that are not runs of the study, made beside its figures
+SIDE_TABLES = (code_verification_table, stability_table)
+
+
 def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = None, workers: int = 2,
           progress: bool = True, settings: str = "quick", document: bool = True) -> Report:
     """Run (or reuse) the plan's runs and write ``tables/*.csv``, ``figures/``, ``fields/`` and,
@@ -93,6 +112,10 @@ def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = No
     wall0 = time.perf_counter()
     out = Path(out)
     study = run_study(plan, RunCache(cache or out / "runs"), scheduler, workers, progress)
+    # the code verification and stability tables (38 and 33 CPU s) in the two worker processes
+    # while this one draws the figures
+    side = ([in_worker(table, out / "runs", settings, workers=max(workers, 1)) for table in SIDE_TABLES]
+            if document and settings in WITH_STABILITY else [])
     analyses = [analyse(cr) for cr in study.cases]
     tables = write_tables(analyses, out / "tables")
     figs = {an.case.name: case_figures(an, out) for an in analyses}
@@ -100,6 +123,8 @@ def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = No
     if tables["effectivity"].get("effectivity", pd.Series(dtype=float)).notna().any():
         overall["effectivity"] = "figures/effectivity.png"
         figures.effectivity(tables["effectivity"], out / overall["effectivity"])
+    for table in side:
+        table.result()
     if document:
         ctx = ReportContext(analyses, tables, figs, study, settings, out, overall)
         subtitle = (f"{settings} settings; cases: {', '.join(an.case.name for an in analyses)}; "

@@ -48,6 +48,12 @@ def _workers(count: int) -> ProcessPoolExecutor:
     return _pool[1]
 
 
+def in_worker(fn, *args, workers: int = 2):
+    """``fn(*args)`` in one of the session's ``workers`` local processes, as a Future: work that
+    overlaps the caller's (the report's tables that are not runs, while it draws figures)."""
+    return _workers(workers).submit(fn, *args)
+
+
 def local(queue: list[Job], workers: int):
     """Run the jobs of ``queue`` on ``workers`` processes, spawned (a forked child would
     inherit the parent's thread pools) once in a session and kept for the next study; each
