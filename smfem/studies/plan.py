@@ -206,9 +206,9 @@ def quick() -> tuple[CaseStudy, ...]:
     """The default report: every solver over meshes up to a few times the paper's and at
     least three time steps (the case's, half and a quarter of it, more where cheap; twice it
     where a quarter is dear and adds little), so that the whole study runs within 10 minutes on
-    two cores (the scenes' truths are stored: ``truths/``). The report: 9 min 54 s on two cores
-    with the install in a fresh clone (2026-11-26, eleven scenes, 399 runs, the error estimates'
-    companions included)."""
+    two cores (the scenes' truths are stored: ``truths/``). The report: 9 min 10 s on two cores
+    of the slower machine (AMD EPYC, AVX2 only) with the install in a fresh clone (2026-11-27,
+    eleven scenes, 380 runs, the error estimates' companions included)."""
     return _estimated(*_quick_studies(), unestimated=("flywheel", "ring_in_ring"), smfem_only=("notched_strip",))
 
 
