@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from types import SimpleNamespace
 
 import numpy as np
@@ -97,3 +98,16 @@ def test_a_ladder_climbs_in_the_order_of_predicted_work():
     # r1 dt / 8 and r2 dt / 2 tie (8 units): the plan's order
     assert [(p["refine"], round(dt / p["dt"])) for p in ladder.params] == [(1, 1), (1, 2), (2, 1), (1, 8), (2, 2),
                                                                           (2, 8)]
+
+
+def test_the_session_pool_is_replaced_after_a_worker_dies():
+    """A worker process that died (killed, out of memory) breaks the pool kept between studies:
+    the next study gets a new one instead of the broken pool's error."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    from smfem.studies.executors import in_worker
+
+    with pytest.raises(BrokenProcessPool):
+        in_worker(os._exit, 1, workers=1).result()
+    queue = [Job.make("dome", SMFEM, {"t_end": 1e-5})]
+    assert [outcome.status for _, outcome in run_jobs(queue, workers=1)] == ["ok"]

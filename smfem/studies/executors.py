@@ -11,6 +11,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 
 from smfem.runs.registry import lookup
 
@@ -34,24 +35,38 @@ _pool: tuple[tuple, ProcessPoolExecutor] | None = None
 
 
 def _workers(count: int) -> ProcessPoolExecutor:
-    """The session's pool of ``count`` spawned processes; a pool of another size, one whose
-    process died, or one spawned under other environment variables (``SMFEM_THREADS``,
-    ``SMFEM_CCX``: a process reads them from the environment it was started with) is shut
-    down and replaced."""
+    """The session's pool of ``count`` spawned processes; a pool of another size, or one spawned
+    under other environment variables (``SMFEM_THREADS``, ``SMFEM_CCX``: a process reads them
+    from the environment it was started with) is shut down and replaced."""
     global _pool
     key = (count, tuple(sorted(os.environ.items())))
-    if _pool is not None and (_pool[0] != key or _pool[1]._broken):
-        _pool[1].shutdown(wait=True, cancel_futures=True)
-        _pool = None
+    if _pool is not None and _pool[0] != key:
+        _discard()
     if _pool is None:
         _pool = (key, ProcessPoolExecutor(max_workers=count, mp_context=multiprocessing.get_context("spawn")))
     return _pool[1]
 
 
+def _discard() -> None:
+    global _pool
+    _pool[1].shutdown(wait=True, cancel_futures=True)
+    _pool = None
+
+
+def _submit(count: int, fn, *args):
+    """``fn(*args)`` on the session's pool of ``count``; a pool broken by a process that died
+    (in an earlier study, say) is replaced first."""
+    try:
+        return _workers(count).submit(fn, *args)
+    except BrokenProcessPool:
+        _discard()
+        return _workers(count).submit(fn, *args)
+
+
 def in_worker(fn, *args, workers: int = 2):
     """``fn(*args)`` in one of the session's ``workers`` local processes, as a Future: work that
     overlaps the caller's (the report's tables that are not runs, while it draws figures)."""
-    return _workers(workers).submit(fn, *args)
+    return _submit(workers, fn, *args)
 
 
 def local(queue: list[Job], workers: int):
@@ -62,11 +77,10 @@ def local(queue: list[Job], workers: int):
     (the caller stops iterating, or an error), the jobs not started are cancelled and the
     running ones finish before it returns, as they did when each study had its own pool."""
     feed = _Feed(queue)
-    pool = _workers(workers)
     pending = {}
 
     def submit():
-        pending.update({pool.submit(execute, job, lookup(job.solver)): job for job in feed.new()})
+        pending.update({_submit(workers, execute, job, lookup(job.solver)): job for job in feed.new()})
 
     try:
         submit()
