@@ -19,7 +19,7 @@ import pandas as pd
 
 from smfem.runs.errors import probe_error
 from smfem.runs.files import write_run
-from smfem.runs.figures import plastic_zones, plt, save
+from smfem.runs.figures import plastic_zones, save, subplots
 from smfem.runs.registry import REFERENCE, SMFEM, solve
 from smfem.runs.zones import plastic_area
 
@@ -42,7 +42,7 @@ def comparison_table(smfem_result, reference_result) -> pd.DataFrame:
 def _histories_figure(case, s, r, path: Path) -> None:
     names = list(s.history)
     fields = {p.name: p.field for p in case.probes}
-    fig, axes = plt.subplots(len(names), 1, figsize=(7, 2.3 * len(names)), squeeze=False, sharex=True)
+    fig, axes = subplots(len(names), 1, figsize=(7, 2.3 * len(names)), squeeze=False, sharex=True)
     for ax, name in zip(axes[:, 0], names):
         ax.plot(1e3 * r.t, r.history[name], "k-", lw=1.2, label="reference FEM")
         ax.plot(1e3 * s.t, s.history[name], "C3--", lw=1.2, label="SMFEM")

@@ -9,11 +9,10 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.ticker import NullLocator  # noqa: E402
 
-from smfem.runs.figures import place_labels, save  # noqa: E402
+from smfem.runs.figures import place_labels, save, subplots  # noqa: E402
 from smfem.runs.registry import lookup  # noqa: E402
 
 from .analysis import CaseAnalysis  # noqa: E402
@@ -67,7 +66,7 @@ def work_precision(an: CaseAnalysis, path: Path) -> Path:
 
 def _axes(height: float):
     # the legend goes below the axes, where it cannot cover a point or its label
-    return plt.subplots(figsize=(6.4, height), layout="constrained")
+    return subplots(figsize=(6.4, height), layout="constrained")
 
 
 def _log_axes(ax) -> None:
@@ -133,7 +132,7 @@ def histories(an: CaseAnalysis, path: Path) -> Path:
     """Each probe over time: the truth, each solver's most accurate run, published points, theory;
     where the case compares through a window (the rod), every curve as the comparison sees it."""
     probes = an.case.probe_names
-    fig, axes = plt.subplots(len(probes), 1, figsize=(6.4, 2.3 * len(probes) + 0.6), sharex=True, squeeze=False)
+    fig, axes = subplots(len(probes), 1, figsize=(6.4, 2.3 * len(probes) + 0.6), sharex=True, squeeze=False)
     theory = theory_curves(an.case)
     window = an.case.references.get("comparison_window_s", 0.0)
     seen = lambda t, x: smoothed(np.asarray(x, float), np.asarray(t, float), window)
@@ -203,7 +202,7 @@ def verification_orders(table, solver: str, path: Path) -> Path:
     against the step (time), with the theory's slope dashed through the finest point."""
     rows = table[(table.solver == solver) & table.parameter.isin(list(_STEP))]
     params = [p for p in _STEP if p in set(rows.parameter)]
-    fig, axes = plt.subplots(1, len(params), figsize=(3.4 * len(params) + 0.6, 3.3), squeeze=False)
+    fig, axes = subplots(1, len(params), figsize=(3.4 * len(params) + 0.6, 3.3), squeeze=False)
     for ax, parameter in zip(axes[0], params):
         key, xlabel = _STEP[parameter]
         ticks = set()

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from smfem.runs.figures import plt, save
+from smfem.runs.figures import save, subplots
 from smfem.runs.registry import lookup
 
 from .figures import _log_axes
@@ -84,7 +84,7 @@ def front_figure(fronts: pd.DataFrame, path: Path, scenes=FIGURE_SCENES) -> Path
     scenes = [s for s in scenes if s in set(fronts.case)]
     cols = 3
     rows = -(-(len(scenes) + 1) // cols)  # one cell more, for the legend
-    fig, axes = plt.subplots(rows, cols, figsize=(10.5, 3.2 * rows), layout="constrained")
+    fig, axes = subplots(rows, cols, figsize=(10.5, 3.2 * rows), layout="constrained")
     axes = list(axes.flat)
     shown = {}
     for ax, scene in zip(axes, scenes):

@@ -15,13 +15,12 @@ WARP_FRACTION = 0.08
 def render_field(vtu: Path, png: Path, title: str, length_unit: str) -> Path:
     """Deformed body (displacement magnified) coloured by the plastic strain where the run has
     one, else by the displacement magnitude; cells marked ``solid = 0`` (cut-outs) left out."""
-    import matplotlib.pyplot as plt
     import pyvista as pv
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
     from vtkmodules.vtkCommonCore import vtkLogger
 
-    from smfem.runs.figures import save
+    from smfem.runs.figures import save, subplots
 
     # off-screen rendering needs no X server, but VTK warns about the missing one on every run
     vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
@@ -48,7 +47,7 @@ def render_field(vtu: Path, png: Path, title: str, length_unit: str) -> Path:
     image = _cropped(plotter.screenshot(return_img=True))
     plotter.close()
     # as tall as the picture needs, up to a page: a rod's picture is narrow then
-    fig, ax = plt.subplots(figsize=(7.0, min(7.0 * image.shape[0] / image.shape[1] + 1.3, 8.5)), layout="constrained")
+    fig, ax = subplots(figsize=(7.0, min(7.0 * image.shape[0] / image.shape[1] + 1.3, 8.5)), layout="constrained")
     ax.imshow(image)
     ax.set_axis_off()
     percent = 100.0 if scalars == "peps" else 1.0

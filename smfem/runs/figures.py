@@ -19,7 +19,6 @@ import matplotlib
 matplotlib.use("Agg")
 #: the resolution figures are made, checked and written at, dots per inch
 DPI = 120
-matplotlib.rcParams["figure.dpi"] = DPI
 import matplotlib.image  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
@@ -33,6 +32,12 @@ from .zones import THRESHOLD, plastic_area  # noqa: E402
 CUTOUT = "#b8c7d9"
 #: an axis label names its quantity, then its unit after the last comma
 UNIT = re.compile(r",\s*\S[^,]*$")
+
+
+def subplots(*args, **kwargs):
+    """``plt.subplots`` at :data:`DPI` (a figure is laid out at the resolution it is written
+    at; matplotlib's own default, a global a user of this package keeps, is left alone)."""
+    return plt.subplots(*args, dpi=DPI, **kwargs)
 
 
 class FigureLayoutWarning(UserWarning):
@@ -182,7 +187,7 @@ def plastic_zones(rows: dict[str, list], path: Path, title: str, case) -> Path:
     ncol = max(len(snaps) for snaps in rows.values())
     cutouts = next((s.poly[~s.solid_cells] for snaps in rows.values() for s in snaps
                     if not s.solid_cells.all()), np.empty((0, 4, 2)))
-    fig, axes = plt.subplots(len(rows), ncol, figsize=(4.4 * ncol + 0.9, 4.8 * len(rows) + 0.5), squeeze=False,
+    fig, axes = subplots(len(rows), ncol, figsize=(4.4 * ncol + 0.9, 4.8 * len(rows) + 0.5), squeeze=False,
                              layout="compressed")  # the layout for equal-aspect panels
     cells = None
     for axrow, (label, snaps) in zip(axes, rows.items()):
