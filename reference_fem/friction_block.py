@@ -52,7 +52,7 @@ class BlockModel:
         return self.weights.shape[0]
 
     def stiffness(self):
-        return forms.stiffness(self.B, self.weights, self.D)
+        return forms.stiffness(self.basis, False, self.weights, self.D)
 
 
 @dataclass(frozen=True)

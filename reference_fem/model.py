@@ -65,8 +65,10 @@ class Model:
         axisym = self.rep == AXISYMMETRIC
         self.B, self.weights = forms.strain_operator(self.basis, axisym)
         self.x_qp = np.asarray(self.basis.global_coordinates()).reshape(self.dim, -1)
+        #: B-bar's volumetric projection per element, or None (:func:`~reference_fem.forms.volumetric_projection`)
+        self.projection = forms.volumetric_projection(self.weights, self.x_qp, self.basis.dx.shape[1]) if bbar else None
         if bbar:
-            self.B = forms.bbar_operator(self.B, self.weights, self.x_qp, self.basis.dx.shape[1])
+            self.B = forms.bbar_operator(self.B, self.projection)
         self.lam, self.mu = case.material.lame
         #: each element's index into ``case.materials`` (0 everywhere without regions)
         self.material_index = regions.mesh_material_index(case, self.rep, mesh, self.rmesh.section, self.rmesh.parent)
@@ -116,7 +118,8 @@ class Model:
 
     def stiffness(self) -> sp.csr_matrix:
         """Elastic stiffness (N/m, or N/m per radian when axisymmetric)."""
-        return forms.stiffness(self.B, self._stiffness_weights(), self.D)
+        return forms.stiffness(self.basis, self.rep == AXISYMMETRIC, self._stiffness_weights(), self.D,
+                               self.projection)
 
     def stiffness_times(self, x: np.ndarray) -> np.ndarray:
         """``K x`` (full dofs) without forming ``K``: ``B^T (w D) B x``, two products with ``B``
