@@ -106,8 +106,9 @@ def material_blocks(D: np.ndarray, weights: np.ndarray) -> sp.bsr_matrix:
 
 
 #: elements whose dense strain blocks :func:`stiffness` forms at once (a 27-node element's are
-#: 105 kB: a few hundred MB of work arrays at most, whatever the mesh)
-ELEMENT_CHUNK = 2000
+#: 105 kB: about a hundred MB of work arrays, whatever the mesh; 2000 at once ran slower on a
+#: first call, its half-GB of fresh pages)
+ELEMENT_CHUNK = 256
 
 
 def stiffness(basis, axisymmetric: bool, weights: np.ndarray, D: np.ndarray,
