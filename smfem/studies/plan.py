@@ -266,8 +266,8 @@ def _quick_studies() -> tuple[CaseStudy, ...]:
                *grid("notched_strip", ({"harmonics": 120},), (1,))),
             # 2 dt rather than dt / 4 (30 CPU s for 0.96 -> 0.93 %): the report's 10 minutes. Its
             # tangents factorized: ideal plasticity over the whole ligament leaves CG 33 iterations a
-            # Newton step on the elastic factors (r1 20-21 against 23-34 CPU s in three runs, r2 112
-            # against 207 s: benchmarks/reference_linear_solver.py); no r2 (0.28 %: the full report's)
+            # Newton step on the elastic factors (r1 20-21 against 23-34 CPU s in three runs, r2 120
+            # against 216 s: benchmarks/reference_linear_solver.py); no r2 (0.28 %: the full report's)
             _s(REF2D, *grid("notched_strip", _r(1), (0.5, 1, 2)), linear_solver="superlu"),
             # 3D at 2 dt: its mesh's limit (2.28 %; dt 2.34 % for 38 CPU s more, dt / 2 2.1 %); no
             # CalculiX (260 CPU s for 1.3 %, a third of the study's CPU, put the report over its 10
