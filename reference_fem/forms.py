@@ -118,8 +118,9 @@ def stiffness(basis, axisymmetric: bool, weights: np.ndarray, D: np.ndarray,
     Each element's ``B_e^T (w D) B_e`` is one dense product over its quadrature points, ``B_e``
     the element's strains of :func:`strain_operator` (with the B-bar ``projection`` of
     :func:`volumetric_projection`, as :func:`bbar_operator` applies it); summed into K once
-    (the 3D thick cylinder at refine 2: 0.9 CPU s against 3.5 s for the sparse product
-    ``B^T (w D B)``, equal to 1e-15 of its largest entry). Entries that cancel exactly are dropped.
+    (the 3D thick cylinder at refine 2: 1.6 CPU s against 3.8 s for the sparse product
+    ``B^T (w D B)``, equal to 7e-16 of its largest entry: benchmarks/reference_setup.py).
+    Entries that cancel exactly are dropped.
     """
     nel, nqe = basis.dx.shape
     nc = D.shape[-1]
