@@ -37,8 +37,11 @@ LINEAR_SOLVERS = (AUTO, SUPERLU, PCG)
 #: CG stops at this residual relative to the right-hand side's: far below Newton's tolerance
 #: on the step (the histories equal the factorized tangent's to 5e-13 on the notched scenes)
 PCG_RTOL = 1e-10
-#: CG iterations before the tangent is factorized after all (a tangent near singular: collapse)
-PCG_MAX_ITERATIONS = 300
+#: CG iterations before the tangent is factorized after all (a tangent near singular: collapse).
+#: A factorization costs 18-53 CG iterations (2D and 3D, benchmarks/README.md), so past 100 CG
+#: is the dearer path; the notched scenes' tangents take 7-51 on average and none reaches 100 at
+#: r1 (the reference's quasi-static collapse test: 8.4 -> 5.1 s against 300)
+PCG_MAX_ITERATIONS = 100
 
 
 class PreconditionedTangent:
