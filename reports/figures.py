@@ -6,19 +6,16 @@ import math
 import textwrap
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.ticker import NullFormatter, NullLocator
 
-matplotlib.use("Agg")
-import numpy as np  # noqa: E402
-from matplotlib.ticker import NullLocator  # noqa: E402
+from smfem.runs.figures import place_labels, save, subplots
+from smfem.runs.registry import lookup
 
-from smfem.runs.figures import place_labels, save, subplots  # noqa: E402
-from smfem.runs.registry import lookup  # noqa: E402
-
-from .analysis import CaseAnalysis  # noqa: E402
-from smfem.studies.effectivity import BAND  # noqa: E402
-from smfem.studies.metrics import TARGETS, TRUTH_MARGIN, smoothed  # noqa: E402
-from .references import published_points, theory_curves  # noqa: E402
+from .analysis import CaseAnalysis
+from smfem.studies.effectivity import BAND
+from smfem.studies.metrics import TARGETS, TRUTH_MARGIN, smoothed
+from .references import published_points, theory_curves
 
 #: characters per line of a figure's title (a 6.4 in wide figure at 8 pt)
 TITLE_WIDTH = 90
@@ -218,7 +215,7 @@ def verification_orders(table, solver: str, path: Path) -> Path:
             theory = group.theoretical_order.iloc[0]
             ax.loglog(x, y[-1] * (x / x[-1]) ** theory, ls="--", color=f"C{k}", lw=0.8)
         for axis in (ax.xaxis, ax.yaxis):  # a short log range labels its minor ticks, one over another
-            axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+            axis.set_minor_formatter(NullFormatter())
         ax.set_xticks(sorted(ticks), [f"{v:g}" for v in sorted(ticks)])  # the levels themselves
         ax.set_xlabel(xlabel)
         ax.set_ylabel("relative L2 error, -" if parameter == "space" else "step-halving difference, -")

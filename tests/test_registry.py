@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import json
 
-import matplotlib.pyplot as plt
 import pandas as pd
 import pytest
 
@@ -16,6 +15,7 @@ from smfem.cli import main
 from reports import figures
 from reports.build import build
 from smfem.studies.plan import MODAL_TRUTH, REF2D, SMFEM, CaseStudy, Series, TruthPlan
+import smfem.runs.figures
 from smfem.runs import registry
 from smfem.runs.registry import CALCULIX, CONTACT, PLASTICITY, REF3D, REFERENCE, SMFEM_QUAD9, Solver, lookup, solvers
 
@@ -55,7 +55,7 @@ def test_a_registered_solver_runs_through_a_study_into_its_tables_and_figures(co
     assert (runs[runs.solver == COARSE].status == "ok").all()
     assert (tmp_path / "report" / "figures" / "dome-work-precision.png").exists()
     kept = []
-    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig))
+    monkeypatch.setattr(smfem.runs.figures, "close", kept.append)
     figures.work_precision(report.analyses[0], tmp_path / "wp.png")
     front = [line for ax in kept[0].axes for line in ax.get_lines() if line.get_label() == f"{coarse.label} (front)"]
     assert len(front) == 1 and (front[0].get_color(), front[0].get_marker()) == (coarse.color, coarse.marker)

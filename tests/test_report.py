@@ -661,19 +661,45 @@ def _texts_outside(fig) -> list[str]:
     return out
 
 
+#: a user's session: their backend chosen, then the project's figures drawn and written
+_USER_SESSION = """
+import sys, matplotlib
+dpi = matplotlib.rcParams["figure.dpi"]
+import reports.figures
+from smfem.runs.figures import save, subplots
+fig, ax = subplots(figsize=(3, 2))
+ax.plot([0, 1], [0, 1])
+ax.set_xlabel("x, m")
+ax.set_ylabel("y, m")
+save(fig, sys.argv[1])
+print("matplotlib.pyplot" in sys.modules, matplotlib.get_backend(), matplotlib.rcParams["figure.dpi"] == dpi)
+"""
+
+
+def test_the_project_figures_leave_matplotlib_globals_alone(tmp_path):
+    """A user of the interface keeps their backend, their dpi and pyplot's figures: the
+    project's figures are drawn on Agg canvases of their own, outside pyplot."""
+    import os
+    import sys
+
+    png = tmp_path / "f.png"
+    out = subprocess.run([sys.executable, "-c", _USER_SESSION, str(png)], capture_output=True, text=True,
+                         env={**os.environ, "MPLBACKEND": "svg"}, check=True).stdout.split()
+    assert out == ["False", "svg", "True"] and png.stat().st_size > 1000
+
+
 def test_work_precision_and_history_figures_keep_their_text_inside(tiny, tmp_path, monkeypatch):
     """Titles (long truth names wrap), target labels and axis labels lie inside the figure, and
     every history axis names its unit."""
-    import matplotlib.pyplot as plt
-
+    import smfem.runs.figures
     from reports import figures
 
     kept = []
-    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig))
+    monkeypatch.setattr(smfem.runs.figures, "close", kept.append)
     for an in tiny.analyses:
         figures.work_precision(an, tmp_path / f"{an.case.name}-wp.png")
         figures.histories(an, tmp_path / f"{an.case.name}-h.png")
-    fig, ax = plt.subplots(figsize=(6.4, 4.6))  # the stored truths' names are long: they wrap
+    fig, ax = smfem.runs.figures.subplots(figsize=(6.4, 4.6))  # the stored truths' names are long: they wrap
     ax.plot([1, 2], [1, 2], label="a")
     figures._save(fig, ax, tmp_path / "long.png", "notched_strip: total error against CPU time\ntruth: "
                   "reference-explicit: r8 (2D, bbar True), central differences at 0.5 of the critical step, "

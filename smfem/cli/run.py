@@ -10,11 +10,10 @@ from cases import get_case, parse_sets, rebuild
 from cases.params import parse_option
 from smfem.runs import validity
 from smfem.runs.estimate import summary_line
-from smfem.runs.files import write_run
-from smfem.runs.registry import FRAMES, SMFEM, family, lookup, named_for, solvers
+from smfem.runs.registry import FRAMES, SMFEM, lookup, named_for, solvers
 from smfem.runs.tolerance import search
 
-from smfem.api import claimed
+from smfem.api import Result, claimed
 
 from .usage import EXIT_NOT_CONVERGED, UsageError, add_sets, check_writable
 
@@ -110,9 +109,8 @@ def _write_checked(out: Path, case, solver: str, result, wall_s: float, est: dic
     """Write the run with its validity (and error estimate, where made already), print the
     validity warning if any; returns the validity."""
     check = validity.check(case, result)
-    est = None if est is None else claimed(check, est)
-    write_run(out, case, family(solver), result, wall_s,
-              extra={"validity": check, **({"error_estimate": est} if est else {}), **extra})
+    Result(case, solver, result, wall_s, None if est is None else claimed(check, est),
+           {"validity": check, **extra}).write(out)
     warning = validity.warning_line(case, check)
     if warning:
         print(warning, file=sys.stderr)

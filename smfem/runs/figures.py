@@ -14,19 +14,20 @@ import re
 import warnings
 from pathlib import Path
 
-import matplotlib
+import matplotlib.image
+import matplotlib.patches
+import matplotlib.ticker
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.collections import PolyCollection
+from matplotlib.figure import Figure
+from matplotlib.legend import Legend
+from matplotlib.text import Annotation, Text
 
-matplotlib.use("Agg")
+from .zones import THRESHOLD, plastic_area
+
 #: the resolution figures are made, checked and written at, dots per inch
 DPI = 120
-import matplotlib.image  # noqa: E402
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.collections import PolyCollection  # noqa: E402
-from matplotlib.legend import Legend  # noqa: E402
-from matplotlib.text import Annotation, Text  # noqa: E402
-
-from .zones import THRESHOLD, plastic_area  # noqa: E402
 
 #: the colour of a cut-out in the plastic-zone figures
 CUTOUT = "#b8c7d9"
@@ -34,10 +35,21 @@ CUTOUT = "#b8c7d9"
 UNIT = re.compile(r",\s*\S[^,]*$")
 
 
-def subplots(*args, **kwargs):
-    """``plt.subplots`` at :data:`DPI` (a figure is laid out at the resolution it is written
-    at; matplotlib's own default, a global a user of this package keeps, is left alone)."""
-    return plt.subplots(*args, dpi=DPI, **kwargs)
+def subplots(nrows: int = 1, ncols: int = 1, *, figsize=None, layout=None, **kwargs):
+    """``plt.subplots`` at :data:`DPI` on an Agg canvas of its own, outside pyplot: a figure is
+    laid out at the resolution it is written at, and matplotlib's globals (its backend, its
+    default dpi, pyplot's figures), which a user of this package keeps, are left alone."""
+    fig = Figure(figsize=figsize, dpi=DPI, layout=layout)
+    FigureCanvasAgg(fig)
+    return fig, fig.subplots(nrows, ncols, **kwargs)
+
+
+def close(fig) -> None:
+    """Let go of a written figure (a pyplot figure, as a test may make, is closed in pyplot)."""
+    if fig.canvas.manager is not None:
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)
 
 
 class FigureLayoutWarning(UserWarning):
@@ -51,10 +63,12 @@ def save(fig, path: Path, dpi: int = DPI) -> Path:
     point labels are placed at the resolution they are checked and written at (placed at
     another, text rendered at the new size touched markers the placement had kept clear of)."""
     fig.set_dpi(dpi)
+    if not isinstance(fig.canvas, FigureCanvasAgg):  # drawn off-screen whatever made it
+        FigureCanvasAgg(fig)
     for problem in layout_problems(fig):
         warnings.warn(f"{Path(path).name}: {problem}", FigureLayoutWarning, stacklevel=2)
     matplotlib.image.imsave(path, fig.canvas.buffer_rgba(), format="png", origin="upper", dpi=dpi)
-    plt.close(fig)
+    close(fig)
     return path
 
 
