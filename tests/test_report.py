@@ -94,6 +94,29 @@ def test_each_estimated_run_states_its_error_against_the_truth(tiny):
         assert dome.loc[(row.solver, row.level), "estimated_error"].max() == pytest.approx(row.estimate, rel=1e-4)
 
 
+def test_an_estimate_asks_for_its_later_companions_as_soon_as_its_known_runs_are_in(tiny):
+    """The companions an estimate asks for after seeing its others (a part measured on the finer
+    side) are followers of its last known run, not a round after the whole study; together
+    they are what the estimates ask for once every run is in."""
+    from smfem.studies import effectivity
+    from smfem.studies.study import job_of
+
+    cache = RunCache(tiny.out / "runs")
+    asked_late, asked_at_end = [], []
+    for study in TINY:
+        plan = effectivity.planned(study, job_of(study))
+        runs = {j: cache.load(j) for run, comps in plan.values() for j in [run, *comps]}
+        follow = effectivity.Followers([(study, plan)])
+        for n, job in enumerate(runs, start=1):
+            more = follow(job, runs[job])
+            complete = {key: jobs for key, jobs in plan.items() if {jobs[0], *jobs[1]} <= set(list(runs)[:n])
+                        and job in {jobs[0], *jobs[1]}}  # the estimates this run completes
+            assert set(more) == set(effectivity.asked(study, complete, runs)), job.describe()
+            asked_late += more
+        asked_at_end += effectivity.asked(study, plan, runs)
+    assert asked_late and set(asked_late) == set(asked_at_end)
+
+
 def test_the_headline_is_the_cheapest_run_within_each_target_of_the_truth(tiny):
     """Recomputed from errors.csv: the cheapest run whose worst headline probe is within the
     target, against the truth; a target below three truth uncertainties is never reached."""

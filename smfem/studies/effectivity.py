@@ -4,8 +4,8 @@ over the run's actual error against the truth, per displacement and velocity pro
 A study estimates each of its ``estimated`` solvers at three settings (:func:`settings`): the
 case's defaults, twice its mesh, half its step. The runs and their companions are study jobs
 like any other, so they run in parallel and stay in the run cache; the companions an estimate
-asks for only after seeing the others (a part measured on the finer side) run in a second
-parallel round (:func:`asked`).
+asks for only after seeing the others (a part measured on the finer side, :func:`asked`) are
+asked for as soon as those are in (:class:`Followers`), beside the rest of the study.
 """
 
 from __future__ import annotations
@@ -89,6 +89,30 @@ def asked(study, plan: dict, runs: dict) -> list[Job]:
         return last[0]
     measure(study, plan, fetch)
     return missing
+
+
+class Followers:
+    """A study's ``follow`` (:func:`smfem.studies.study.run_cached`) for its estimates: once an
+    estimate's run and its known companions are all in, the companions it asks for beyond them
+    (:func:`asked`), so that they start while the rest of the study runs.
+
+    ``planned``: per study, its :func:`planned` estimates."""
+
+    def __init__(self, planned: list[tuple[object, dict]]):
+        self._waiting = [(study, {key: jobs}, {jobs[0], *jobs[1]})
+                         for study, plan in planned for key, jobs in plan.items()]
+        self._runs: dict = {}
+
+    def __call__(self, job: Job, run) -> list[Job]:
+        self._runs[job] = run
+        ready, self._waiting = _split(self._waiting, lambda w: w[2] <= self._runs.keys())
+        return [j for study, plan, _ in ready for j in asked(study, plan, self._runs)]
+
+
+def _split(items: list, test) -> tuple[list, list]:
+    """``items`` that pass ``test`` and those that do not, each in order."""
+    passed = [test(item) for item in items]
+    return [i for i, p in zip(items, passed) if p], [i for i, p in zip(items, passed) if not p]
 
 
 def judged(case, truth, t, history, est: dict) -> list[dict]:

@@ -186,13 +186,11 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
     every = [job for _, series, ref, fields, truth in layout
              for job in [*sum(series.values(), []), ref, fields, *truth.values()] if job is not None]
     every += [j for jobs in estimated.values() for run, comps in jobs.values() for j in [run, *comps]]
-    runs, executed, cached = run_cached(every, cache, scheduler, workers, progress,
-                                        follow=lambda job, run: by_job[job].after(job, run) if job in by_job else [])
-    # the companions an estimate asks for once it has seen the others, in parallel too
-    later = [j for study in plan for j in effectivity.asked(study, estimated[study.case], runs)]
-    found, more, hits = run_cached(later, cache, scheduler, workers, progress)
-    runs.update(found)
-    executed, cached = executed + more, cached + hits
+    estimates = effectivity.Followers([(study, estimated[study.case]) for study in plan])
+
+    def follow(job, run):  # a carried series' next level; the companions an estimate asks for
+        return (by_job[job].after(job, run) if job in by_job else []) + estimates(job, run)
+    runs, executed, cached = run_cached(every, cache, scheduler, workers, progress, follow=follow)
     cases = []
     for study, series, ref, fields, truth in layout:
         series |= {solver: ladder.running for solver, ladder in ladders[study.case].items()}
