@@ -19,9 +19,9 @@ from smfem.runs.threads import pin
 pin()
 
 from cases import get_case  # noqa: E402
-from smfem.runs.errors import history_errors  # noqa: E402
 from smfem.runs.registry import solve  # noqa: E402
 from smfem.studies import stored  # noqa: E402
+from smfem.studies.metrics import headline_errors  # noqa: E402
 
 #: measured 2026-11-26 (benchmarks/README.md): the cheapest run of each scene within its target
 RUNS = ("dome:2:2", "thick_cylinder:3:16", "notched_strip:2:2", "rod_impact:1:2", "notched_cylinder:3:2:bbar")
@@ -33,9 +33,7 @@ def measure(item: str, sets: dict | None = None) -> dict:
     base = get_case(name)
     case = get_case(name, {"dim": 3, "refine": int(refine), "dt": base.dt / float(divisor), **(sets or {})})
     result = solve("reference", case, options={"bbar": "bbar" in flags})
-    window = case.references.get("comparison_window_s", 0.0)
-    errors = {p.name: history_errors(result.t, result.history[p.name], truth.t, truth.values[p.name], window)[0]
-              for p in case.probes if p.field in ("u", "v") and truth.converged(p.name)}
+    errors = headline_errors(case, truth, result.t, result.history)
     return {"run": item, "n_dof": result.n_dof, "cpu_s": result.cpu_time_s, "error": max(errors.values()),
             "worst": max(errors, key=errors.get), "cg": result.info.get("cg_iterations", 0),
             "peak_GB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6}

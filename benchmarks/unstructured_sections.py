@@ -23,20 +23,11 @@ from pathlib import Path
 from cases import get_case
 from reports.analysis import family_of
 from smfem.runs import threads
-from smfem.runs.errors import history_errors
 from smfem.runs.registry import SMFEM, solve
 from smfem.studies import metrics
 from smfem.studies.stored import directory, read
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-
-
-def total_error(case, result, truth) -> float:
-    """The headline total error: the largest over the displacement and velocity probes."""
-    window = case.references.get("comparison_window_s", 0.0)
-    errors = [history_errors(result.t, result.history[p.name], truth.t, truth.values[p.name], window)[0]
-              for p in case.probes if family_of(p) == "headline" and truth.converged(p.name)]
-    return max(errors)
 
 
 def measure(case, repeat: int = 2) -> tuple[float, object]:
@@ -68,7 +59,7 @@ def main(argv=None) -> int:
                         over["t_end"] = 5 * base.dt
                     case = get_case(source, over)
                     cpu, result = measure(case, 1 if args.tiny else 2)
-                    err = total_error(case, result, truth)
+                    err = metrics.headline_error(case, truth, result.t, result.history)
                     points[section].append((cpu, err, f"r{refine} dt/{divisor}"))
                     print(f"{name} {section:12s} r{refine} dt/{divisor}: total error {100 * err:.3g} %, CPU {cpu:.3g} s")
         u = max(truth.uncertainty_of([p.name for p in get_case(name).probes if family_of(p) == "headline"]), 0.0)

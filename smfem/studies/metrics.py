@@ -84,14 +84,20 @@ def richardson(h, q) -> Richardson | None:
 HEADLINE_FIELDS = ("u", "v")
 
 
-def headline_error(case, truth, t, history) -> float:
-    """The headline measure of one run (``t``, ``history[probe]``) against ``truth``: the largest
-    relative max-norm error over the case's displacement and velocity probes that the truth has
-    converged, through the case's comparison window; NaN where it has none."""
+def headline_errors(case, truth, t, history) -> dict[str, float]:
+    """The relative max-norm error of one run (``t``, ``history[probe]``) against ``truth`` on
+    each of the case's displacement and velocity probes that the truth has converged, through
+    the case's comparison window."""
     window = case.references.get("comparison_window_s", 0.0)
-    errors = [history_errors(t, np.asarray(history[p.name]), truth.t, truth.values[p.name], window)[0]
-              for p in case.probes if p.field in HEADLINE_FIELDS and p.name in truth.values and truth.converged(p.name)]
-    return max(errors) if errors else math.nan
+    return {p.name: history_errors(t, np.asarray(history[p.name]), truth.t, truth.values[p.name], window)[0]
+            for p in case.probes if p.field in HEADLINE_FIELDS and p.name in truth.values and truth.converged(p.name)}
+
+
+def headline_error(case, truth, t, history) -> float:
+    """The headline measure of one run against ``truth``: the largest of :func:`headline_errors`;
+    NaN where the truth has converged none."""
+    errors = headline_errors(case, truth, t, history)
+    return max(errors.values()) if errors else math.nan
 
 
 #: error levels of the headline: CPU time to reach each
