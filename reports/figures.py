@@ -39,12 +39,6 @@ def work_precision(an: CaseAnalysis, path: Path) -> Path:
         labels.append((front.cpu, 100 * front.total, front.index, entry.color))
     for target in TARGETS:
         ax.axhline(100 * target, color="0.4", ls="--", lw=0.8)
-    # the targets named on the right-hand axis, outside the plot: a label inside could lie on a
-    # run's marker, and where the runs fall depends on the machine's CPU times
-    named = ax.secondary_yaxis("right")
-    named.yaxis.set_minor_locator(NullLocator())
-    named.set_yticks([100 * t for t in TARGETS], labels=[f"{100 * t:g} %" for t in TARGETS])
-    named.tick_params(labelsize=7, labelcolor="0.3", length=0)
     u = an.truth_uncertainty
     if math.isfinite(u) and u > 0:
         ax.axhspan(1e-10, 100 * TRUTH_MARGIN * u, color="0.85", zorder=0,
@@ -58,6 +52,13 @@ def work_precision(an: CaseAnalysis, path: Path) -> Path:
                 if len(s.points) and (s.points.total > 0).any()] or [min(TARGETS)])
     bottom = 0.5 * min(ymin, TRUTH_MARGIN * u if math.isfinite(u) and u > 0 else ymin, min(TARGETS))
     ax.set_ylim(100 * bottom, max(ax.get_ylim()[1], 200 * max(TARGETS)))  # the targets and their labels inside
+    # the targets named on the right-hand axis, outside the plot: a label inside could lie on a
+    # run's marker, and where the runs fall depends on the machine's CPU times. Made once the
+    # scale is log: setting the scale resets a secondary axis's ticks (it showed "10^0", not "1 %")
+    named = ax.secondary_yaxis("right")
+    named.yaxis.set_minor_locator(NullLocator())
+    named.set_yticks([100 * t for t in TARGETS], labels=[f"{100 * t:g} %" for t in TARGETS])
+    named.tick_params(labelsize=7, labelcolor="0.3", length=0)
     return _save(fig, ax, path, f"{an.case.name}: total error against CPU time\ntruth: {an.truth.name}", labels)
 
 

@@ -730,6 +730,9 @@ def test_work_precision_and_history_figures_keep_their_text_inside(tiny, tmp_pat
     assert len(kept) == 2 * len(tiny.analyses) + 1
     for fig in kept:
         assert _texts_outside(fig) == []
+    for fig in kept[:-1:2]:  # each work-precision figure names the targets on its right-hand axis
+        named = [child for ax in fig.axes for child in ax.child_axes]
+        assert [t.get_text() for a in named for t in a.get_yticklabels() if t.get_text()] == ["1 %", "5 %"]
     for fig, an in zip(kept[1:-1:2], tiny.analyses):
         labels = [ax.get_ylabel() for ax in fig.axes]
         assert all(", " in label and label.split(", ")[-1] for label in labels), labels
