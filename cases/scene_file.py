@@ -17,10 +17,11 @@ key (``scene.toml: section.s.counts: ...``); unknown keys are refused. No solver
 
 from __future__ import annotations
 
+import hashlib
 import math
 import re
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -79,10 +80,21 @@ _MISSING = object()
 
 @dataclass(frozen=True)
 class Source:
-    """What a file scene was read from: the path as given and its text (:func:`cases.rebuild`)."""
+    """What a file scene was read from: the path as given, its text (:func:`cases.rebuild`) and
+    the sha256 of each other file it read (a gmsh section), by path."""
 
     path: str
     text: str
+    files: tuple = ()
+
+    @property
+    def digest(self) -> str:
+        """sha256 of everything the scene was read from: what a run of it depends on besides
+        its parameters (the run cache's key)."""
+        h = hashlib.sha256(self.text.encode())
+        for _, sha in self.files:
+            h.update(sha.encode())
+        return h.hexdigest()
 
 
 def load(path, overrides: dict | None = None) -> Case:
@@ -103,7 +115,9 @@ def from_text(text: str, file: str, overrides: dict | None = None) -> Case:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(_one_line(f"{file}: not valid TOML: {exc}")) from None
-    return _Scene(file, doc).build(overrides or {}, Source(file, text))
+    scene = _Scene(file, doc)
+    case = scene.build(overrides or {}, Source(file, text))
+    return replace(case, source=Source(file, text, tuple(scene.files_read))) if scene.files_read else case
 
 
 def _one_line(message: str) -> str:
@@ -215,6 +229,7 @@ class _Scene:
         self.named: set[str] = set()  # the parameters some value names
         self.bodies: tuple[str, ...] = ()  # the names of [[bodies]], none with [section]
         self.body_regions: tuple[Region, ...] = ()  # the bodies that give their own material
+        self.files_read: list[tuple[str, str]] = []  # (path, sha256) of the other files read
 
     def fail(self, where: str, message: str):
         raise ParameterError(_one_line(f"{self.file}: {where}: {message}"))
@@ -390,9 +405,11 @@ class _Scene:
         if path.suffix.lower() != ".msh":
             t.fail("file", f"{name!r}: give a gmsh mesh file (.msh)")
         try:
-            return read_msh(path, self.body)
+            section = read_msh(path, self.body)
         except (ParameterError, UnsupportedCase) as exc:
             t.fail("file", str(exc))
+        self.files_read.append((str(path), hashlib.sha256(path.read_bytes()).hexdigest()))
+        return section
 
     def read_regions(self, tables: list[_Table]) -> tuple[Region, ...]:
         """``[[region]]``: a part of the section of its own material (the other constants as the

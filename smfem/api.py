@@ -290,7 +290,8 @@ def error(result: Result, against=None) -> float:
 
 def study(scenes: list[str] | tuple[str, ...], out: str | Path = "out/study", *, full: bool = False,
           workers: int = 2, progress: bool = True, cache: str | Path | None = None, scheduler: str | None = None):
-    """Series of runs of built-in ``scenes`` with every solver, their errors against the truth and
+    """Series of runs of ``scenes`` (built-in names, or scene files ``*.toml``: a study made for
+    each, :mod:`smfem.studies.own_scene`) with every solver, their errors against the truth and
     the work-precision diagrams, as ``smfem study`` makes them (``out/tables/*.csv``,
     ``out/figures/``). Returns the :class:`reports.build.Report`: ``tables`` (name -> DataFrame),
     ``analyses`` (per scene), ``study`` (executed and cached runs). ``cache``: the run cache
@@ -309,9 +310,10 @@ def report(out: str | Path = "out/report", *, full: bool = False, scenes: tuple[
 
 def _build(names: tuple[str, ...], out, full: bool, workers: int, progress: bool, document: bool, cache, scheduler):
     from reports.build import build
-    from smfem.studies.plan import full as full_plan, quick, select
+    from smfem.studies.own_scene import select
+    from smfem.studies.plan import full as full_plan, quick
 
     threads.pin()
-    plan = select(full_plan() if full else quick(), names)
+    plan = select(full_plan() if full else quick(), names, full)
     return build(plan, Path(out), cache=cache and Path(cache), scheduler=scheduler, workers=workers,
                  progress=progress, settings="full" if full else "quick", document=document)

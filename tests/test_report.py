@@ -645,6 +645,9 @@ def test_verdict_sentences_say_who_is_faster_and_why_no_claim():
                                        "faster than the 3D reference.")
     coarse = rows((SMFEM, "truth not fine enough", "truth not fine enough", "", "", 0.4, 2.0))
     assert "no claim" in sentence("x", coarse) and "2 %" in sentence("x", coarse)
+    judged_at_5 = rows((SMFEM, "truth not fine enough", "0.0278 (r1 H1)", "", "", 0.68, 0.97))
+    assert sentence("pipe", judged_at_5) == ("pipe: SMFEM reaches 5 % total error in 0.0278 s CPU (r1 H1); 1 % is "
+                                             "past what the truth can judge (its uncertainty 0.97 %).")
     missed = rows((SMFEM, "not reached (best 5.5 %)", "not reached (best 5.5 %)", "", "", 5.5, 0.24),
                   (REF2D, "not reached (best 4.3 %)", "33.4 (r2)", "neither reaches it", "< 4.22x", 4.3, 0.24))
     assert sentence("nc", missed) == "nc: SMFEM does not reach 5 % in this study (best 5.5 %); the 2D reference in 33.4 s (r2) reaches it."

@@ -11,11 +11,14 @@ from .usage import UsageError, add_study_options, check_workers, check_writable
 
 def add(sub) -> None:
     study = sub.add_parser("study", help="convergence and error-against-CPU-time study: tables/*.csv, figures/")
-    study.add_argument("cases", nargs="+", metavar="CASE")
+    study.add_argument("cases", nargs="+", metavar="CASE", help="built-in scenes or scene files (NAME.toml: a "
+                                                                "study made for the scene, docs/usage.md)")
     add_study_options(study, "out/study")
     _store_fronts(study)
     study.set_defaults(handler=command)
     report = sub.add_parser("report", help="the verification report: index.html, report.pdf, tables/*.csv")
+    report.add_argument("cases", nargs="*", metavar="CASE", help="only these scenes, built-in or from files "
+                                                                 "(NAME.toml); default: every scene of the plan")
     add_study_options(report, "out/report")
     _store_fronts(report)
     report.add_argument("--publish", default=None, metavar="DIR",

@@ -24,7 +24,7 @@ def add(sub) -> None:
     truth = sub.add_parser("truth", help="a case's truth, converged in mesh, harmonics and time: history.csv, "
                                          "summary.json with per-probe uncertainty (--full: the stored truth, "
                                          "written to smfem/truths/CASE)")
-    truth.add_argument("case")
+    truth.add_argument("case", help="a built-in scene or a scene file (NAME.toml)")
     add_sets(truth, "case parameters (the truth chooses refine, harmonics and dim; dt sets its time grid)")
     add_study_options(truth, None)
     truth.set_defaults(handler=command)
@@ -35,6 +35,7 @@ def command(args) -> int:
     ``summary.json``; 3 if a level it needs stopped without a history."""
     from smfem.studies.calibration import calibrate, second_plan, widen
     from smfem.studies.executors import SchedulerUnreachable
+    from smfem.studies.own_scene import scene_ref
     from smfem.studies.stored import key_of
     from smfem.studies.truth import plan_for
 
@@ -43,9 +44,10 @@ def command(args) -> int:
     chosen = [k for k in TRUTH_KEYS if k in base]
     if chosen:
         raise UsageError(f"--set {chosen[0]}: the truth chooses {', '.join(TRUTH_KEYS)} itself (its levels)")
+    args.case = scene_ref(args.case)  # a scene file by its absolute path: workers read it wherever they run
     case = get_case(args.case, base)  # a bad case, key or value: exit 2 before anything is written
-    stored = args.full and not base
-    out = Path(args.out or (f"smfem/truths/{args.case}" if stored else f"out/{args.case}-truth"))
+    stored = args.full and not base and case.source is None  # a scene file's truth is the user's
+    out = Path(args.out or (f"smfem/truths/{case.name}" if stored else f"out/{case.name}-truth"))
     check_writable(out)
     cache = Path(args.cache or ("out/truth-runs" if stored else out / "runs"))
     plan = plan_for(args.case, base, "full" if args.full else "quick")

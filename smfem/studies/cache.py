@@ -72,9 +72,13 @@ def source_files(package: str) -> list[tuple[Path, Path]]:
 
 
 def key_of(job: Job) -> dict:
-    """What identifies a run: the resolved parameters, not the overrides that led to them."""
-    key = {"case": job.case, "solver": job.solver, "params": job.build().params, "fields": job.fields,
+    """What identifies a run: the resolved parameters, not the overrides that led to them (and
+    a scene file's contents, :attr:`cases.scene_file.Source.digest`)."""
+    case = job.build()
+    key = {"case": job.case, "solver": job.solver, "params": case.params, "fields": job.fields,
            "version": code_version(job.solver)}
+    if case.source is not None:  # a scene from a file: its text (and mesh) decide the run too
+        key["scene"] = case.source.digest
     return {**key, "options": dict(job.options)} if job.options else key
 
 
@@ -147,7 +151,7 @@ class RunCache:
         if job not in self._paths:
             key = key_of(job)
             digest = hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()[:20]
-            self._paths[job] = self.root / job.case / job.solver / digest
+            self._paths[job] = self.root / job.scene / job.solver / digest
         return self._paths[job]
 
     def load(self, job: Job) -> Run | None:

@@ -61,7 +61,12 @@ class Job:
 
     def describe(self) -> str:
         sets = " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in self.overrides + self.options)
-        return f"{self.case} {self.solver} {sets}".strip()
+        return f"{self.scene} {self.solver} {sets}".strip()
+
+    @property
+    def scene(self) -> str:
+        """The scene's name: a built-in one's, or a scene file's own (``name = ...``), not its path."""
+        return self.case if self.resolved.source is None else self.resolved.name
 
 
 @dataclass

@@ -503,11 +503,13 @@ def _estimated(*studies: CaseStudy, unestimated=(), smfem_only=()) -> tuple[Case
 
 
 def select(plan: tuple[CaseStudy, ...], names) -> tuple[CaseStudy, ...]:
-    """The case studies of ``names`` (all when empty), in the order given."""
+    """The case studies of ``names`` (all when empty), in the order given (a scene file's:
+    :func:`smfem.studies.own_scene.select`)."""
     if not names:
         return plan
     by_name = {s.case: s for s in plan}
     unknown = [n for n in names if n not in by_name]
     if unknown:
-        raise ParameterError(f"unknown case {unknown[0]!r}: choose one of {', '.join(by_name)}")
+        raise ParameterError(f"unknown case {unknown[0]!r}: choose one of {', '.join(by_name)} or give a scene "
+                             "file NAME.toml")
     return tuple(by_name[n] for n in names)

@@ -58,7 +58,10 @@ def stored_truth(study: CaseStudy) -> tuple[Truth | None, str]:
     key matches (:mod:`smfem.studies.stored`), and why not otherwise."""
     if study.truth is None:
         return None, "the study has no truth plan"
-    return find_stored(study.case, get_case(study.case, study.base), plan_for(study.case, study.base, "full"))
+    case = get_case(study.case, study.base)
+    if case.source is not None:
+        return None, "a scene from a file has no stored truth"
+    return find_stored(study.case, case, plan_for(study.case, study.base, "full"))
 
 
 def job_of(study: CaseStudy):

@@ -159,14 +159,18 @@ def explicit_unsupported(case) -> str | None:
 
 def plan_for(name: str, base: dict, settings: str = "quick") -> TruthPlan:
     """The truth plan of case ``name`` with overrides ``base``: the study's own where it fits
-    the case as set up; else modal where the case is linear and homogeneous along x3 (the
+    the case as set up (a scene the plan does not have, from a file: the explicit ladder, for
+    quick settings on meshes 1, 2 and 4, 1 and 2 in 3D); else modal where the case is linear and homogeneous along x3 (the
     unnotched elastic strip), else (a plastic variant cannot be modal) the explicit reference
     for ``full`` settings where it can run the case, time-step halving otherwise, on a
     reference that can run it (2D where the scene has a 2D form)."""
     full_ = settings == "full"
     studies = {s.case: s for s in (*full(), *(() if full_ else quick()))}  # a scene only the full study has
-    plan = studies[name].truth
     case = get_case(name, base)
+    # a scene of the user's own: the explicit reference, fine in time whatever the scene's step
+    # (meshes one step past the quick study's in 2D, two in 3D), adapted to its physics below
+    plan = studies[name].truth if name in studies else explicit_truth() if full_ else \
+        explicit_truth(dict(refine=(1, 2, 4) if reference_solver(case) == REF2D else (1, 2)))
     modal_ok = not modal_unsupported(case)
     if plan.method != MODAL_TRUTH and modal_ok:
         plan = _modal_plan(case, full_)

@@ -1,0 +1,80 @@
+"""The study of a scene from a file (``smfem study my_scene.toml``): the verification the built-in
+scenes get, for a body the plan does not know.
+
+Its series span the scene's own settings as the built-in scenes' do (:mod:`smfem.studies.plan`):
+SMFEM's meshes at twice and four times the scene's (harmonics with them, for a scene that has
+more than one) at the scene's step, half and a quarter of it; the quadratic element; the
+reference FEM that can run the scene (2D where it has a 2D form, else 3D) and, beside a 2D one,
+the 3D reference at the scene's mesh. Its truth is made as a built-in scene's would be were it
+new (:func:`smfem.studies.truth.plan_for`: modal where the scene is linear and homogeneous along
+x3, else time-step halving on the reference, or in full the explicit reference's ladder). The
+full study carries every series to 1 % or its CPU budget, as the full report does.
+
+A scene is named in jobs by its file's absolute path, so that a worker process reads it
+wherever it runs; the run cache keys a run by the file's text as well (:mod:`smfem.studies.cache`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from cases import get_case
+
+from .plan import CALCULIX, REF2D, REF3D, SMFEM, SMFEM_QUAD9, CaseStudy, Series, carried, grid
+from .plan import select as select_builtin
+from .truth import plan_for, reference_solver
+
+#: the scene's mesh (and harmonics) times these: the quick study's and the full one's
+QUICK_SCALES, FULL_SCALES = (1, 2), (1, 2, 4)
+#: the scene's step over these
+QUICK_DIVISORS, FULL_DIVISORS = (1, 2, 4), (1, 2, 4, 8)
+
+
+def is_scene_file(name) -> bool:
+    """Whether ``name`` names a scene file (``*.toml``) rather than a built-in scene."""
+    return str(name).lower().endswith(".toml")
+
+
+def scene_ref(name: str) -> str:
+    """How jobs name a scene: a file by its absolute path, a built-in scene by its name."""
+    return str(Path(name).resolve()) if is_scene_file(name) else name
+
+
+def study_of(name: str, full: bool = False, base: dict | None = None) -> CaseStudy:
+    """The study of scene file ``name`` (quick, or ``full``), every run with the ``base``
+    overrides (a shorter window, say)."""
+    ref, base = scene_ref(name), dict(base or {})
+    case = get_case(ref, base)
+    scales, divisors = (FULL_SCALES, FULL_DIVISORS) if full else (QUICK_SCALES, QUICK_DIVISORS)
+    refine = case.params.get("refine", 1)
+
+    def spaces(k_values, harmonics: bool):
+        """The scene's mesh (with SMFEM, its harmonics too, beyond one) times each of ``k_values``."""
+        return tuple({"refine": k * refine, **({"harmonics": k * case.harmonics} if harmonics and case.harmonics > 1
+                                               else {})} for k in k_values)
+
+    def at(k_values, steps=divisors, harmonics=False):
+        return grid(ref, spaces(k_values, harmonics), steps)
+
+    reference = reference_solver(case)
+    series = [Series(SMFEM, at(scales, harmonics=True)),
+              Series(SMFEM_QUAD9, at(scales[:-1] if full else scales[:1], harmonics=True))]
+    if reference == REF2D:
+        series += [Series(REF2D, at(scales)), Series(REF3D, at(scales[:1], (0.5, 1, 2) if full else (1,)))]
+    else:  # 3D only: the reference at the scene's mesh, and at twice it in full
+        series += [Series(REF3D, at(scales[:2] if full else scales[:1], (1, 2) if full else (1,)))]
+    if full:
+        series.append(Series(CALCULIX, ({},)))
+    study = CaseStudy(ref, tuple(series), reference=(reference, spaces(scales[-1:], False)[0]),
+                      truth=plan_for(ref, base, "full" if full else "quick"), base=base,
+                      estimated=(SMFEM, reference))
+    return carried((study,))[0] if full else study
+
+
+def select(plan: tuple[CaseStudy, ...], names, full: bool = False) -> tuple[CaseStudy, ...]:
+    """The case studies of ``names`` (all of ``plan`` when empty), in the order given: a built-in
+    scene's from ``plan`` (:func:`smfem.studies.plan.select`), a scene file's made for it
+    (:func:`study_of`, quick or ``full``)."""
+    if not names:
+        return plan
+    return tuple(study_of(n, full) if is_scene_file(n) else select_builtin(plan, (n,))[0] for n in names)

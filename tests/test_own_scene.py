@@ -1,0 +1,83 @@
+"""A scene of one's own gets the built-in scenes' verification: ``smfem study my_scene.toml`` (its
+series, a truth made for it, the work-precision tables) and ``smfem truth my_scene.toml``, with
+runs cached by the file's contents."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from dataclasses import replace
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from cases import get_case
+from cases.scene_file import Source
+from reports.build import build
+from smfem.cli import main
+from smfem.studies.cache import RunCache
+from smfem.studies.own_scene import study_of
+from smfem.studies.plan import EXPLICIT_TRUTH, REF2D, REF3D, SMFEM, SMFEM_QUAD9, Series
+from smfem.studies.study import run_study
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+#: the pipe's first 25 steps: seconds for the whole study
+SHORT = {"t_end": 5e-5}
+
+
+@pytest.fixture
+def pipe(tmp_path) -> Path:
+    """examples/pipe.toml copied where the test may edit it."""
+    return Path(shutil.copy(EXAMPLES / "pipe.toml", tmp_path / "pipe.toml"))
+
+
+def test_a_scene_file_is_studied_with_every_solver_against_a_truth_made_for_it(pipe, tmp_path):
+    study = study_of(str(pipe), base=SHORT)
+    assert study.truth.method == EXPLICIT_TRUTH and study.truth.refine == (1, 2, 4)  # elastic-plastic: not modal
+    assert [s.solver for s in study.series] == [SMFEM, SMFEM_QUAD9, REF2D, REF3D]
+    study = replace(study, series=study.series[:3])  # the 3D run: two thirds of the study's CPU time
+    report = build((study,), tmp_path / "study", progress=False, document=False)
+    head = pd.read_csv(tmp_path / "study" / "tables" / "headline.csv")
+    assert set(head.case) == {"pipe"} and set(head.solver) == {SMFEM, SMFEM_QUAD9, REF2D}
+    assert head.truth.str.startswith("reference-explicit").all() and (head.truth_uncertainty_pct > 0).all()
+    errors = pd.read_csv(tmp_path / "study" / "tables" / "errors.csv")
+    total = errors[errors.kind == "total"]
+    assert set(total.solver) == set(head.solver) and (total.err_max > 0).all() and total.err_max.notna().all()
+    assert (tmp_path / "study" / "figures" / "pipe-work-precision.png").exists()
+    assert sorted(p.name for p in pipe.parent.iterdir()) == ["pipe.toml", "study"]  # nothing beside the scene
+    assert report.study.executed and (tmp_path / "study" / "runs" / "pipe").is_dir()
+
+    cache = RunCache(tmp_path / "study" / "runs")
+    assert run_study((study,), cache, progress=False).executed == []
+    # the same name, another load: SMFEM's run at the scene's settings is the new scene's, not the cached one
+    pipe.write_text(pipe.read_text().replace("q = 1e7", "q = 2e7"))
+    alone = replace(study_of(str(pipe), base=SHORT), series=(Series(SMFEM, ({},)),), reference=None, truth=None,
+                    estimated=())
+    anew = RunCache(cache.root)  # a cache reads a job's key once: a study sees its files as they were at its start
+    assert [job.solver for job in run_study((alone,), anew, progress=False).executed] == [SMFEM]
+
+
+def test_the_truth_command_takes_a_scene_file(pipe, tmp_path, capsys):
+    out = tmp_path / "truth"
+    assert main(["truth", str(pipe), "--set", "t_end=5e-5", "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["name"].startswith("reference-explicit") and 0 < summary["uncertainty"]["inner_ur"] < 1
+    assert "inner_ur" in pd.read_csv(out / "history.csv").columns
+
+
+def test_a_missing_scene_file_is_a_clear_error(tmp_path, capsys):
+    for command in (["study", str(tmp_path / "none.toml"), "--out", str(tmp_path / "s")],
+                    ["truth", str(tmp_path / "none.toml"), "--out", str(tmp_path / "t")]):
+        assert main(command) == 2
+        err = capsys.readouterr().err
+        assert "none.toml: cannot read the scene file" in err and "Traceback" not in err
+
+
+def test_a_scene_files_digest_covers_its_text_and_the_mesh_it_reads():
+    case = get_case(EXAMPLES / "flywheel.toml")
+    (path, sha), = case.source.files
+    assert Path(path).name == "flywheel.msh" and sha == hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    assert Source("a.toml", "x", ((path, "1"),)).digest != Source("a.toml", "x", ((path, "2"),)).digest
+    assert Source("a.toml", "x").digest != Source("a.toml", "y").digest
