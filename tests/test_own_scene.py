@@ -81,3 +81,15 @@ def test_a_scene_files_digest_covers_its_text_and_the_mesh_it_reads():
     assert Path(path).name == "flywheel.msh" and sha == hashlib.sha256(Path(path).read_bytes()).hexdigest()
     assert Source("a.toml", "x", ((path, "1"),)).digest != Source("a.toml", "x", ((path, "2"),)).digest
     assert Source("a.toml", "x").digest != Source("a.toml", "y").digest
+
+
+def test_a_scenes_study_starts_from_its_own_mesh_and_keeps_3d_runs_few():
+    """A scene at refine 2 is studied (and its truth made) from refine 2 up; a scene the 2D
+    reference cannot run (the flywheel: its load is not axisymmetric) has its 3D reference at
+    the scene's mesh as the same-dt reference, and no 3D error estimates (a 3D run's companions
+    are 3D runs too)."""
+    finer = study_of(str(EXAMPLES / "pipe.toml"), base={"refine": 2})
+    assert finer.truth.refine == (2, 4, 8) and {level["refine"] for level in finer.series[0].levels} == {2, 4}
+    wheel = study_of(str(EXAMPLES / "flywheel.toml"))
+    assert [s.solver for s in wheel.series] == [SMFEM, SMFEM_QUAD9, REF3D]
+    assert wheel.reference == (REF3D, {"refine": 1}) and wheel.estimated == (SMFEM,)

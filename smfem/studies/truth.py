@@ -159,11 +159,12 @@ def explicit_unsupported(case) -> str | None:
 
 def plan_for(name: str, base: dict, settings: str = "quick") -> TruthPlan:
     """The truth plan of case ``name`` with overrides ``base``: the study's own where it fits
-    the case as set up (a scene the plan does not have, from a file: the explicit ladder, for
-    quick settings on meshes 1, 2 and 4, 1 and 2 in 3D); else modal where the case is linear and homogeneous along x3 (the
+    the case as set up; else modal where the case is linear and homogeneous along x3 (the
     unnotched elastic strip), else (a plastic variant cannot be modal) the explicit reference
     for ``full`` settings where it can run the case, time-step halving otherwise, on a
-    reference that can run it (2D where the scene has a 2D form)."""
+    reference that can run it (2D where the scene has a 2D form). A scene the plan does not
+    have (from a file) is planned as a new one: the explicit ladder (quick: meshes 1, 2 and 4,
+    1 and 2 in 3D) adapted so, its meshes times the scene's own ``refine``."""
     full_ = settings == "full"
     studies = {s.case: s for s in (*full(), *(() if full_ else quick()))}  # a scene only the full study has
     case = get_case(name, base)
@@ -184,6 +185,9 @@ def plan_for(name: str, base: dict, settings: str = "quick") -> TruthPlan:
         plan = replace(plan, solver=solver)
     if plan.method == EXPLICIT_TRUTH:
         plan = replace(plan, dim=lookup(solver).dim)
+    scale = case.params.get("refine", 1)
+    if name not in studies and scale != 1:  # the ladders start from the scene's own mesh
+        plan = replace(plan, refine=tuple(scale * r for r in plan.refine), check=tuple(scale * r for r in plan.check))
     return plan
 
 
