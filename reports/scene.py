@@ -4,6 +4,7 @@ or two), its other figures after them, its per-run and per-probe tables in the a
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pandas as pd
 
@@ -145,7 +146,10 @@ def scene(ctx, an: CaseAnalysis) -> Section:
     name, figs = an.case.name, ctx.figures.get(an.case.name, {})
     head = ctx.tables["headline"]
     rows = head[head.case == name]
-    blocks = [p(an.case.title)]
+    source = an.case.source  # a scene from a file: where it came from, beside its title if it has one
+    about = an.case.title if source is None else \
+        f"{an.case.title + ': ' if an.case.title != name else ''}a scene from the file {Path(source.path).name}"
+    blocks = [p(about)]
     if len(rows):
         blocks.append(p(sentence(name, rows.set_index("solver")), css="verdict"))
     if "work_precision" in figs:
