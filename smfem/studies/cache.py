@@ -25,7 +25,6 @@ from pathlib import Path
 
 import pandas as pd
 
-from cases import get_case
 from cases.result import RunResult
 from smfem.runs.files import read_run
 from smfem.runs.registry import lookup
@@ -107,7 +106,7 @@ class Run:
         time scheme other than Newmark's (``gauss``) and the 3D reference's count round a ring
         and mirror half (``N16 half``): two runs of a series never share a label."""
         p = self.summary["params"] if self.summary else self.job.build().params
-        default_dt = get_case(self.job.case).params["dt"]
+        default_dt = self.job.defaults["dt"]
         coarse = f"/{p['coarsen']}" if p.get("coarsen", 1) != 1 else ""  # r1/2: half the paper mesh
         text = f"r{p.get('refine', 1)}{coarse}" + (f" H{p.get('harmonics')}" if lookup(self.job.solver).harmonics else "")
         text += f" dt{p['dt']:g}" if p.get("dt", default_dt) != default_dt else ""

@@ -59,6 +59,12 @@ class Job:
     def resolved(self):
         return get_case(self.case, dict(self.overrides))
 
+    @functools.cached_property
+    def defaults(self) -> dict:
+        """The scene's own parameters, without the job's overrides (read once per job: a scene
+        file with a gmsh section takes tens of ms to read)."""
+        return get_case(self.case).params
+
     def describe(self) -> str:
         sets = " ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in self.overrides + self.options)
         return f"{self.scene} {self.solver} {sets}".strip()
