@@ -2,13 +2,14 @@
 scenes get, for a body the plan does not know.
 
 Its series span the scene's own settings as the built-in scenes' do (:mod:`smfem.studies.plan`):
-SMFEM's meshes at twice and four times the scene's (harmonics with them, for a scene that has
-more than one) at the scene's step, half and a quarter of it; the quadratic element; the
-reference FEM that can run the scene (2D where it has a 2D form, else 3D) and, beside a 2D one,
-the 3D reference at the scene's mesh. Its truth is made as a built-in scene's would be were it
-new (:func:`smfem.studies.truth.plan_for`: modal where the scene is linear and homogeneous along
-x3, else time-step halving on the reference, or in full the explicit reference's ladder). The
-full study carries every series to 1 % or its CPU budget, as the full report does.
+SMFEM at the scene's mesh and twice it (full: four times; harmonics with the mesh, for a scene
+that has more than one), each at the scene's step, half and a quarter of it (full: an eighth);
+the quadratic element; the reference FEM that can run the scene (2D where it has a 2D form,
+else 3D) and, beside a 2D one, the 3D reference at the scene's mesh. Its truth is made as a
+built-in scene's would be were it new (:func:`smfem.studies.truth.plan_for`: modal where the
+scene is linear and homogeneous along x3, else the explicit reference over three meshes, else
+time-step halving). The full study carries every series to 1 % or its CPU budget, as the full
+report does.
 
 A scene is named in jobs by its file's absolute path, so that a worker process reads it
 wherever it runs; the run cache keys a run by the file's text as well (:mod:`smfem.studies.cache`).
