@@ -8,8 +8,9 @@ the quadratic element; the reference FEM that can run the scene (2D where it has
 else 3D) and, beside a 2D one, the 3D reference at the scene's mesh. Its truth is made as a
 built-in scene's would be were it new (:func:`smfem.studies.truth.plan_for`: modal where the
 scene is linear and homogeneous along x3, else the explicit reference over three meshes, else
-time-step halving). The full study carries every series to 1 % or its CPU budget, as the full
-report does.
+time-step halving). Every level runs, in the full study too: a series is carried along its
+ladder only against a stored truth (:mod:`smfem.studies.ladder`), and a scene file's truth is
+made by the study itself.
 
 A scene is named in jobs by its file's absolute path, so that a worker process reads it
 wherever it runs; the run cache keys a run by the file's text as well (:mod:`smfem.studies.cache`).
@@ -21,7 +22,7 @@ from pathlib import Path
 
 from cases import get_case
 
-from .plan import CALCULIX, REF2D, REF3D, SMFEM, SMFEM_QUAD9, CaseStudy, Series, carried, grid
+from .plan import CALCULIX, REF2D, REF3D, SMFEM, SMFEM_QUAD9, CaseStudy, Series, grid
 from .plan import select as select_builtin
 from .truth import plan_for, reference_solver
 
@@ -70,10 +71,9 @@ def study_of(name: str, full: bool = False, base: dict | None = None) -> CaseStu
         series.append(Series(CALCULIX, ({},)))
     # the same-dt reference: the finest reference mesh of the series; error estimates of SMFEM
     # and of a 2D reference (a 3D run's companions are 3D runs too, dear)
-    study = CaseStudy(ref, tuple(series), reference=(reference, spaces(meshes[-1:], False)[0]),
-                      truth=plan_for(ref, base, "full" if full else "quick"), base=base,
-                      estimated=(SMFEM, REF2D) if reference == REF2D else (SMFEM,))
-    return carried((study,))[0] if full else study
+    return CaseStudy(ref, tuple(series), reference=(reference, spaces(meshes[-1:], False)[0]),
+                     truth=plan_for(ref, base, "full" if full else "quick"), base=base,
+                     estimated=(SMFEM, REF2D) if reference == REF2D else (SMFEM,))
 
 
 def select(plan: tuple[CaseStudy, ...], names, full: bool = False) -> tuple[CaseStudy, ...]:
