@@ -33,11 +33,18 @@ def _comparison(solver: str, speedup: str) -> str | None:
         return None
     bound, x = m.group(1), float(m.group(2))
     name = lookup(solver).prose
+    if not bound and _even(x):  # 0.999x: "the 2D reference 1 times faster" said nothing
+        return f"as fast as {name}"
     if x >= 1:
         more = {"<": "at most ", ">": "more than "}.get(bound, "")
         return f"{more}{_times(x)} times faster than {name}"
     less = {"<": "more than ", ">": "at most "}.get(bound, "")
     return f"{name} {less}{_times(1 / x)} times faster"
+
+
+def _even(speedup: float) -> bool:
+    """A speed-up within half a per cent of 1: as fast, neither faster nor slower."""
+    return abs(math.log(speedup)) < 0.005
 
 
 def _times(x: float) -> str:
@@ -117,7 +124,8 @@ def _speedup_cell(speedup) -> str:
     if not m:
         return "-"
     bound, x = m.group(1), float(m.group(2))
-    return f"{bound + ' ' if bound else ''}{_times(x)}" + (" (slower)" if x < 1 and bound != ">" else "")
+    return f"{bound + ' ' if bound else ''}{_times(x)}" + (" (slower)" if x < 1 and bound != ">" and not _even(x)
+                                                          else "")
 
 
 def summary_table(head: pd.DataFrame, vs=(("reference-2d", "2D FEM"), ("reference-3d", "3D FEM"))) -> list[str]:

@@ -661,6 +661,9 @@ def test_verdict_sentences_say_who_is_faster_and_why_no_claim():
     far = rows((SMFEM, "0.149 (r2 H1)", "0.025 (r1 H1)", "", "", 0.8, 0.04),
                (REF3D, "157 (r2 dt2.5e-06)", "121 (r2)", "1.05e+03x", "> 4.85e+03x", 0.98, 0.04))
     assert sentence("dome", far).endswith(": 1050 times faster than the 3D reference.")
+    even = rows((SMFEM, "0.271 (r2 H1)", "0.06 (r1 H1)", "", "", 0.8, 0.04),
+                (REF2D, "0.271 (r2)", "0.09 (r1)", "0.999x", "1.5x", 0.7, 0.04))
+    assert sentence("dome", even).endswith("(r2 H1): as fast as the 2D reference.")
     from smfem.cli.study import headline_lines
 
     lines = headline_lines(both.reset_index().assign(case="dome"))
