@@ -16,6 +16,8 @@ import pytest
 from cases import get_case
 from cases.scene_file import Source
 from reports.build import build
+from reports.scene import scene
+from reports.sections import ReportContext
 from smfem.cli import main
 from smfem.studies.cache import RunCache
 from smfem.studies.own_scene import study_of
@@ -48,6 +50,10 @@ def test_a_scene_file_is_studied_with_every_solver_against_a_truth_made_for_it(p
     assert (tmp_path / "study" / "figures" / "pipe-work-precision.png").exists()
     assert sorted(p.name for p in pipe.parent.iterdir()) == ["pipe.toml", "study"]  # nothing beside the scene
     assert report.study.executed and (tmp_path / "study" / "runs" / "pipe").is_dir()
+    ctx = ReportContext(report.analyses, report.tables, {}, report.study, "quick", tmp_path / "study")
+    section = scene(ctx, report.analyses[0])  # its section in the report names the file it came from
+    assert section.blocks[0]["text"] == "a scene from the file pipe.toml"
+    assert section.blocks[1]["text"].startswith("pipe: SMFEM reaches ")  # the verdict follows
 
     cache = RunCache(tmp_path / "study" / "runs")
     assert run_study((study,), cache, progress=False).executed == []
