@@ -54,9 +54,9 @@ def measure(name: str, dim: int, refine: int, sets: dict | None = None) -> dict:
     rho = case.material.rho
     scalar, t_scalar = _timed(lambda: consistent_mass(basis, rho, axisymmetric))
     vector, t_vector = _timed(lambda: asm(vector_mass, basis, rho=rho, weight=radius).tocsr())
-    weights = model.weights if model.factor is None else model.weights * model.factor
     by_element, t_element = _timed(model.stiffness)
-    product, t_product = _timed(lambda: (model.B.T @ (forms.material_blocks(model.D, weights) @ model.B)).tocsr())
+    product, t_product = _timed(lambda: (model.B.T @ (forms.material_blocks(model.D, model.stiffness_weights())
+                                                       @ model.B)).tocsr())
     return {"model": f"{name} {dim}D r{refine}", "n_dof": basis.N, "mass_scalar": t_scalar, "mass_vector": t_vector,
             "mass_difference": _difference(scalar, vector), "stiffness_elements": t_element,
             "stiffness_product": t_product, "stiffness_difference": _difference(by_element, product)}

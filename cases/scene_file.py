@@ -115,9 +115,7 @@ def from_text(text: str, file: str, overrides: dict | None = None) -> Case:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(_one_line(f"{file}: not valid TOML: {exc}")) from None
-    scene = _Scene(file, doc)
-    case = scene.build(overrides or {}, Source(file, text))
-    return replace(case, source=Source(file, text, tuple(scene.files_read))) if scene.files_read else case
+    return _Scene(file, doc).build(overrides or {}, Source(file, text))
 
 
 def _one_line(message: str) -> str:
@@ -299,7 +297,7 @@ class _Scene:
             initial_velocity=tuple(self.read_velocity(t) for t in top.tables("initial_velocity", VELOCITY_KEYS)),
             wall=wall, forces=forces, variation=variation, regions=regions, contacts=contacts,
             units=top.string("units", Case.__dataclass_fields__["units"].default),
-            references=self.read_references(top, probes), source=source,
+            references=self.read_references(top, probes), source=replace(source, files=tuple(self.files_read)),
             **self.read_symmetry(top, loads, cutouts, wall, forces, variation),
         )
         self.check_unused(params, features)

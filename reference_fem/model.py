@@ -118,15 +118,17 @@ class Model:
 
     def stiffness(self) -> sp.csr_matrix:
         """Elastic stiffness (N/m, or N/m per radian when axisymmetric)."""
-        return forms.stiffness(self.basis, self.rep == AXISYMMETRIC, self._stiffness_weights(), self.D,
+        return forms.stiffness(self.basis, self.rep == AXISYMMETRIC, self.stiffness_weights(), self.D,
                                self.projection)
 
     def stiffness_times(self, x: np.ndarray) -> np.ndarray:
         """``K x`` (full dofs) without forming ``K``: ``B^T (w D) B x``, two products with ``B``
         (a probe's row of K: forming K again for it cost 2.9 of a 3D rod run's 20 CPU s)."""
-        return self.B.T @ (forms.material_blocks(self.D, self._stiffness_weights()) @ (self.B @ x))
+        return self.B.T @ (forms.material_blocks(self.D, self.stiffness_weights()) @ (self.B @ x))
 
-    def _stiffness_weights(self) -> np.ndarray:
+    def stiffness_weights(self) -> np.ndarray:
+        """The quadrature weights the stiffness integrates with: ``weights`` times the material's
+        variation along x3, where the case has one."""
         return self.weights if self.factor is None else self.weights * self.factor
 
     def edge_facets(self, edge: str) -> np.ndarray:

@@ -170,8 +170,9 @@ def plan_for(name: str, base: dict, settings: str = "quick") -> TruthPlan:
     case = get_case(name, base)
     # a scene of the user's own: the explicit reference, fine in time whatever the scene's step
     # (meshes one step past the quick study's in 2D, two in 3D), adapted to its physics below
+    solver = reference_solver(case)
     plan = studies[name].truth if name in studies else explicit_truth() if full_ else \
-        explicit_truth(dict(refine=(1, 2, 4) if reference_solver(case) == REF2D else (1, 2)))
+        explicit_truth(dict(refine=(1, 2, 4) if solver == REF2D else (1, 2)))
     modal_ok = not modal_unsupported(case)
     if plan.method != MODAL_TRUTH and modal_ok:
         plan = _modal_plan(case, full_)
@@ -180,7 +181,6 @@ def plan_for(name: str, base: dict, settings: str = "quick") -> TruthPlan:
                 TruthPlan(TIME_TRUTH, refine=(1, 2), dt_divisors=(1, 2, 4)))
     if plan.method == EXPLICIT_TRUTH and explicit_unsupported(case):
         plan = TruthPlan(TIME_TRUTH, refine=(2, 3) if full_ else (1, 2), dt_divisors=(1, 2, 4, 8) if full_ else (1, 2, 4))
-    solver = reference_solver(case)
     if plan.method == TIME_TRUTH:
         plan = replace(plan, solver=solver)
     if plan.method == EXPLICIT_TRUTH:
