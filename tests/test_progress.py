@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import math
 
 from smfem.runs.progress import INTERVAL, Progress
 
@@ -55,13 +56,58 @@ def test_an_estimate_of_the_time_left_is_said_while_running_and_not_at_the_end()
                                            "study: 2/3 runs, 20 s (run 2)", "study: 3/3 runs, 30 s (run 3)"]
 
 
-def test_the_time_left_counts_unknown_runs_at_the_mean_of_the_known_ones():
-    from smfem.studies.study import time_left
+class _Earlier:
+    """A run cache that knows the earlier wall times of some jobs."""
 
-    assert time_left({"a": 100.0, "b": 300.0, "c": None}, workers=2) == (100 + 300 + 200) / 2
-    assert time_left({"a": None}, workers=2) is None and time_left({}, workers=2) is None
+    def __init__(self, walls=None):
+        self.walls = walls or {}
+
+    def previous_wall(self, job):
+        return self.walls.get(job)
 
 
+def _finished(job, wall):
+    from smfem.studies.cache import Run
+
+    return Run(job, "ok", "", None, None, {"wall_time_s": wall})
+
+
+def test_the_time_left_of_a_fresh_study_comes_from_its_finished_runs():
+    """On an empty cache nothing is said until a run is in; then the same scene and solver's
+    runs are predicted by their work (refine 2 is four times refine 1's cells: 4 ** 0.7 times
+    its time, the exponent of fewer than three runs), another solver's at the median of the
+    finished ones, and no estimate is shorter than the longest run left."""
+    from smfem.studies.eta import DEFAULT_EXPONENT, TimeLeft
+    from smfem.studies.jobs import Job
+
+    r1, r2, r3 = (Job.make("dome", "smfem", {"refine": r}) for r in (1, 2, 3))
+    ref = Job.make("dome", "reference-2d", {"refine": 1})
+    left = TimeLeft(_Earlier(), workers=2)
+    left.expect([r1, r2, r3, ref])
+    assert left.seconds() is None
+    left.finished(r1, _finished(r1, 10.0))
+    expected = {r2: 10.0 * 4 ** DEFAULT_EXPONENT, r3: 10.0 * 9 ** DEFAULT_EXPONENT, ref: 10.0}
+    assert math.isclose(left.seconds(), max(sum(expected.values()) / 2, expected[r3]))  # r3 alone is longer
+    left.finished(r2, _finished(r2, 20.0))
+    left.finished(ref, _finished(ref, 1.0))
+    b = DEFAULT_EXPONENT  # two runs: the exponent is not fitted, the factor is their mean's
+    factor = math.exp((math.log(10.0) + math.log(20.0 / 4 ** b)) / 2)
+    assert math.isclose(left.seconds(), factor * 9 ** b)  # one run left: all of it, not half
+
+
+def test_a_power_law_is_fitted_to_three_runs_or_more_and_earlier_wall_times_come_first():
+    from smfem.studies.eta import TimeLeft, power_law
+    from smfem.studies.jobs import Job
+
+    a, b = power_law([(w, 3.0 * w ** 0.9) for w in (1.0, 4.0, 16.0)])
+    assert math.isclose(b, 0.9) and math.isclose(math.exp(a), 3.0)
+    assert power_law([(w, w ** 3) for w in (1.0, 4.0, 16.0)])[1] == 1.5  # bounded
+    jobs = [Job.make("dome", "smfem", {"refine": r}) for r in (1, 2, 3)]
+    left = TimeLeft(_Earlier({jobs[2]: 100.0}), workers=2)
+    left.expect(jobs)
+    assert left.seconds() == 150.0  # the others, never run, at the mean of the known: 300 s on two workers
+    left.finished(jobs[0], _finished(jobs[0], 1.0))
+    assert math.isclose(left.seconds(), max((100.0 + 4 ** 0.7) / 2, 100.0))  # the earlier wall time stands
 def test_a_runs_earlier_wall_time_is_found_across_code_versions(tmp_path, monkeypatch):
     """A resumed or re-run report expects each run to take what it took last time, whatever
     code version made it; a job never run has no estimate."""

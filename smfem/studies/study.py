@@ -11,6 +11,7 @@ from smfem.runs.registry import lookup
 
 from . import effectivity
 from .cache import Run, RunCache
+from .eta import TimeLeft
 from .executors import run_jobs
 from .jobs import Job
 from .ladder import Ladder
@@ -143,29 +144,21 @@ def run_cached(jobs: list[Job], cache: RunCache, scheduler: str | None = None, w
         return todo
 
     queue = sorted(ask(jobs), key=_cost_order)
-    expected = {job: cache.previous_wall(job) for job in queue} if progress else {}
+    left = TimeLeft(cache, workers)
+    if progress:
+        left.expect(queue)
     with Progress(len(queue), "study", "run", enabled=progress) as bar:
         for done, (job, outcome) in enumerate(run_jobs(queue, scheduler, workers), start=1):
             path = cache.path(job)
             found[path] = cache.store(job, outcome)
-            expected.pop(job, None)
             more = ask([j for waiter in waiting.pop(path) for j in follow(waiter, found[path])])
             queue += more
             if progress:
-                expected |= {j: cache.previous_wall(j) for j in more}
+                left.finished(job, found[path])
+                left.expect(more)
             bar.grow(len(more))
-            bar.update(done, job.describe(), time_left(expected, workers))
+            bar.update(done, job.describe(), left.seconds() if progress else None)
     return {job: found[cache.path(job)] for job in asked}, queue, cached
-
-
-def time_left(expected: dict, workers: int) -> float | None:
-    """Seconds the runs not finished yet should take on ``workers``: their earlier wall times
-    (``expected``, job -> seconds or None), a run without one counted at the mean of the known;
-    None when none is known."""
-    known = [w for w in expected.values() if w is not None]
-    if not known:
-        return None
-    return (sum(known) + (len(expected) - len(known)) * sum(known) / len(known)) / max(workers, 1)
 
 
 def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | None = None, workers: int = 2,
