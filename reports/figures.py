@@ -62,9 +62,14 @@ def work_precision(an: CaseAnalysis, path: Path) -> Path:
     return _save(fig, ax, path, f"{an.case.name}: total error against CPU time\ntruth: {an.truth.name}", labels)
 
 
+#: the report's figures' width, and about the width of a character of a 7-point name (inches)
+FIGURE_WIDTH_IN = 6.4
+NAME_CHAR_IN = 0.06
+
+
 def _axes(height: float):
     # the legend goes below the axes, where it cannot cover a point or its label
-    return subplots(figsize=(6.4, height), layout="constrained")
+    return subplots(figsize=(FIGURE_WIDTH_IN, height), layout="constrained")
 
 
 def _log_axes(ax) -> None:
@@ -181,9 +186,11 @@ def effectivity(table, path: Path) -> Path:
             x = [names.index(c) + 0.3 * (k - (len(solvers) - 1) / 2) + 0.07 * (j - 1) for c in rows.case]
             ax.plot(x, rows.effectivity, ls="none", marker=marker, color=entry.color, ms=5, mfc="none",
                     label=f"{entry.label}, {setting}")
-    # upright names: a slanted name's box reaches over its neighbour's (layered_cylinder, layered_cylinder_pulse)
-    ax.set_xticks(range(len(names)), names, fontsize=7, rotation=90)
-    ax.set(yscale="log", ylabel="effectivity (estimate / actual error), -", xlim=(-0.6, len(names) - 0.4))
+    # level where each name fits its slot, else upright: a slanted name's box reaches over its
+    # neighbour's (layered_cylinder, layered_cylinder_pulse); an upright one shortens the axes
+    level = max(map(len, names)) * NAME_CHAR_IN <= FIGURE_WIDTH_IN * 0.8 / len(names)
+    ax.set_xticks(range(len(names)), names, fontsize=7, rotation=0 if level else 90)
+    ax.set(yscale="log", ylabel="estimate / actual error, -", xlim=(-0.6, len(names) - 0.4))
     lo, hi = ax.get_ylim()
     ax.set_ylim(min(lo, 0.1), max(hi, 10))
     return _save(fig, ax, path, "Each run's error estimate against its actual error (displacement and velocity "

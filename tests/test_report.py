@@ -760,3 +760,19 @@ def test_a_series_carries_its_solver_options_to_its_jobs_and_labels():
     assert Run(bbar, "ok", "", None).label == "r1 bbar"
     nc = next(s for s in full() if s.case == "notched_cylinder")
     assert dict(next(s for s in nc.series if s.solver == REF3D).options) == {"bbar": True}
+
+
+@pytest.mark.parametrize("names", [["rod_impact_unstructured"], [f"scene_with_a_long_name_{k}" for k in range(11)]])
+def test_the_effectivity_figure_keeps_its_text_inside_for_one_scene_or_many(names, tmp_path, monkeypatch):
+    """A scene of one's own with a long name (examples/rod_impact_unstructured.toml) ran its
+    axis label off the figure: its name stood upright under the axes and left them too short."""
+    import smfem.runs.figures
+    from reports import figures
+
+    kept = []
+    monkeypatch.setattr(smfem.runs.figures, "close", kept.append)
+    rows = [{"case": name, "solver": solver, "setting": setting, "effectivity": e}
+            for name in names for solver in (SMFEM, REF2D)
+            for setting, e in zip(("defaults", "refine 2", "dt/2"), (0.7, 1.3, 2.9))]
+    figures.effectivity(pd.DataFrame(rows), tmp_path / "effectivity.png")
+    assert len(kept) == 1 and _texts_outside(kept[0]) == []
