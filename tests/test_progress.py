@@ -56,6 +56,29 @@ def test_an_estimate_of_the_time_left_is_said_while_running_and_not_at_the_end()
                                            "study: 2/3 runs, 20 s (run 2)", "study: 3/3 runs, 30 s (run 3)"]
 
 
+def test_a_line_is_said_while_nothing_finishes_and_the_time_left_counts_down():
+    """A run of ten minutes in a study: the beat says the line every interval without an
+    update, the time left less the time since it was estimated, nothing once it has run out."""
+    import time
+
+    out, clock = io.StringIO(), _Clock()
+
+    def wait_for(lines):
+        for _ in range(500):
+            if len(out.getvalue().splitlines()) >= lines:
+                return
+            time.sleep(0.002)
+
+    with Progress(3, "study", "run", stream=out, clock=clock, beat=0.001) as bar:
+        bar.update(1, "run 1", left_s=100.0)  # at 0 s: no line yet
+        clock.t = INTERVAL + 30
+        wait_for(1)
+        clock.t = 200.0
+        wait_for(2)
+    assert out.getvalue().splitlines() == ["study: 1/3 runs, 40 s, about 60 s left (run 1)",
+                                           "study: 1/3 runs, 200 s (run 1)"]
+
+
 class _Earlier:
     """A run cache that knows the earlier wall times of some jobs."""
 
