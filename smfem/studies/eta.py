@@ -11,7 +11,9 @@ took then. Any other is predicted from the runs of this study that have finished
 The runs share the workers, and no estimate is shorter than the longest run left.
 
 Replayed on finished studies in the order their runs finished (``python benchmarks/time_left.py``):
-0.5-2.2 times the time actually left (docs/verification.md).
+0.5-2.2 times the time actually left (docs/verification.md). Its blind spot: a solver none of
+whose runs has finished yet. The moving load's full study said "about 2 s left" while its one
+CalculiX run, counted at the median of the finished runs, had 3 minutes to go.
 """
 
 from __future__ import annotations
