@@ -547,7 +547,7 @@ def test_rod_theory_histories():
     theory = case.references["rod_theory"]
     t = np.linspace(0, case.t_end, 6001)
     h = rod_histories(theory, t)
-    c, (t0, t1) = theory["c"], theory["t_contact"]
+    c, (_, t1) = theory["c"], theory["t_contact"]
     assert h["rod_vz"][0] == -5.0 and h["rod_vz"][-1] == 5.0
     assert h["mid_szz"][np.searchsorted(t, 0.4 / c)] == 0.0
     assert h["mid_szz"][np.searchsorted(t, 1.0 / c)] == pytest.approx(theory["stress"])
