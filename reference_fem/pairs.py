@@ -170,7 +170,6 @@ class PairLog(ContactLog):
 
     def __init__(self, system, per_radian: bool):
         super().__init__(system, per_radian)
-        self.momentum = []
         self.counts = np.zeros(3, int)  # the largest number of nodes open, sticking, slipping at once
         self.closed = 0  # and closed (sticking or slipping; frictionless: closed is STICK)
         self.pairs = len(system.model.case.contacts)
@@ -178,10 +177,6 @@ class PairLog(ContactLog):
     def record(self, t: float, u: np.ndarray, v: np.ndarray, u_full: np.ndarray) -> None:
         super().record(t, u, v, u_full)
         s = self.system
-        dim = s.model.dim
-        full = np.zeros(s.model.basis.N)
-        full[s.model.free] = s.M @ v
-        self.momentum.append(self.factor * full.reshape(-1, dim).sum(axis=0))
         count = np.bincount(s.state.state, minlength=3)[:3]
         self.counts = np.maximum(self.counts, count)
         self.closed = max(self.closed, count[1] + count[2])
@@ -191,9 +186,16 @@ class PairLog(ContactLog):
         rows = self.system.rows
         return float((rows.g0 + rows.H[: rows.n_c] @ u_full[self.system.model.free]).min())
 
+    def momentum(self, v: np.ndarray) -> np.ndarray:
+        """``M v`` summed per mesh component, of the free dofs' velocity ``v``."""
+        s = self.system
+        full = np.zeros(s.model.basis.N)
+        full[s.model.free] = s.M @ v
+        return self.factor * full.reshape(-1, s.model.dim).sum(axis=0)
+
     def info(self) -> dict:
         out = super().info()
-        out.update(contact_pairs=self.pairs, momentum_before=self.momentum[0].tolist(),
-                   momentum_after=self.momentum[-1].tolist(), most_nodes_closed=int(self.closed),
+        out.update(contact_pairs=self.pairs, momentum_before=self.momentum(self.first[1]).tolist(),
+                   momentum_after=self.momentum(self.last[1]).tolist(), most_nodes_closed=int(self.closed),
                    most_nodes_stick=int(self.counts[1]), most_nodes_slip=int(self.counts[2]))
         return out
