@@ -50,24 +50,24 @@ class TimeLeft:
 
     def __init__(self, cache: RunCache, workers: int):
         self.cache, self.workers = cache, max(workers, 1)
-        self.waiting: dict[Job, float | None] = {}  # job -> its earlier wall time, or None
+        self.waiting: dict[Job, tuple[float | None, float]] = {}  # job -> (its earlier wall time or None, its work)
         self.done: dict[tuple, list[tuple[float, float]]] = defaultdict(list)  # (scene, solver) -> (work, wall)
         self.fits: dict[tuple, tuple[float, float]] = {}  # (scene, solver) -> power_law(done), while it holds
 
     def expect(self, jobs: list[Job]) -> None:
         for job in jobs:
-            self.waiting[job] = self.cache.previous_wall(job)
+            self.waiting[job] = self.cache.previous_wall(job), _work(job)
 
     def finished(self, job: Job, run: Run) -> None:
-        self.waiting.pop(job, None)
+        _, size = self.waiting.pop(job, (None, None))
         wall = (run.summary or {}).get("wall_time_s")
         if wall and wall > 0:
-            self.done[_group(job)].append((_work(job), float(wall)))
+            self.done[_group(job)].append((_work(job) if size is None else size, float(wall)))
             self.fits.pop(_group(job), None)
 
     def seconds(self) -> float | None:
         """Seconds the waiting runs should take on the workers; None before anything is known."""
-        times = [self._expected(job, earlier) for job, earlier in self.waiting.items()]
+        times = [self._expected(job, *known) for job, known in self.waiting.items()]
         if not times:
             return None
         if any(t is None for t in times):
@@ -80,7 +80,7 @@ class TimeLeft:
                     times[i] = _like(job, finished) if finished else sum(known) / len(known)
         return max(sum(times) / self.workers, max(times))
 
-    def _expected(self, job: Job, earlier: float | None) -> float | None:
+    def _expected(self, job: Job, earlier: float | None, size: float) -> float | None:
         if earlier is not None:
             return earlier
         group = _group(job)
@@ -89,7 +89,7 @@ class TimeLeft:
         if group not in self.fits:
             self.fits[group] = power_law(self.done[group])
         a, b = self.fits[group]
-        return math.exp(a + b * math.log(_work(job)))
+        return math.exp(a + b * math.log(size))
 
 
 def _like(job: Job, finished: list[tuple[tuple, float]]) -> float:
