@@ -89,7 +89,9 @@ class MovingPressure:
         dof ``(n_facets, n_local, ALONG + 1)``."""
         x = np.polynomial.legendre.leggauss(ALONG)[0]
         inverse = np.linalg.inv(np.polynomial.legendre.legvander(x, ALONG - 1))  # values -> coefficients
-        dofs = anti = None
+        n_local = self.model.basis.Nbfun  # a facet basis's local dofs are its element's
+        dofs = np.empty((n_local, self.facets.size), int)
+        anti = np.empty((self.facets.size, n_local, ALONG + 1))
         for along in np.unique(self.along):
             mine = np.flatnonzero(self.along == along)
             fb = self._basis(self.facets[mine], self._rule(0.0, 1.0, int(along), points=0.5 * (x + 1)))
@@ -98,9 +100,6 @@ class MovingPressure:
                                    for i in range(fb.Nbfun)], axis=1)  # (facets, n_local, points)
             values = per_point.reshape(per_point.shape[:2] + (ALONG, -1)).sum(axis=-1)  # across summed
             coefficients = values @ inverse.T
-            if dofs is None:
-                dofs = np.empty((fb.element_dofs.shape[0], self.facets.size), int)
-                anti = np.empty((self.facets.size, fb.Nbfun, ALONG + 1))
             dofs[:, mine] = fb.element_dofs
             anti[mine] = 0.5 * np.polynomial.legendre.legint(coefficients, axis=-1)  # ds = dx / 2
         return dofs, anti
