@@ -26,7 +26,7 @@ from typing import Iterator
 import numpy as np
 import scipy.sparse.linalg as sla
 
-from .newmark import LinearSystem, State
+from .newmark import LinearSystem, MassSolve, State
 
 ROOT3 = math.sqrt(3.0)
 #: the stages' times within a step, in steps
@@ -52,13 +52,13 @@ class GaussSystem(LinearSystem):
 
     def factorize(self, dt: float):
         """The complex stage matrix's factorization (and the coupled mass's, for accelerations)."""
-        self.mass_lu = None if self.diagonal_mass else sla.splu(self.M.tocsc())
+        self.mass_solve = MassSolve(self.M)
         return sla.splu((self.K + self.mass_matrix((MU * MU / (dt * dt)) * self.M)).astype(complex).tocsc())
 
     def acceleration(self, t: float, u: np.ndarray) -> np.ndarray:
         """``M^-1 (f(t) - K u)``."""
         force = self.load(t) - self.K @ u
-        return force / self.M if self.diagonal_mass else self.mass_lu.solve(force)
+        return self.mass_solve(force)
 
     def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
         return self.acceleration(0.0, u0)

@@ -34,7 +34,7 @@ from cases import x3_points
 from . import laws, woodbury
 from .coupling import StackedOperator
 from .linalg import factorize_spd
-from .newmark import Constants, Load, StepFailed
+from .newmark import Constants, Load, MassSolve, StepFailed
 from .options import SolverOptions
 from .sampling import SamplePoints
 
@@ -184,9 +184,7 @@ class BlockIterative:
         if u0.any():
             self.state.law.sigma = self.points.stress(u0).reshape(6, -1)
         force = self.load(0.0) - self.op.K(u0)
-        if self.model.coupling:
-            return sla.spsolve(self.model.mass_matrix().tocsc(), force)
-        return force / self.op.M_h
+        return MassSolve(self.model.mass_matrix() if self.model.coupling else self.op.M_h)(force)
 
     def commit(self, u: np.ndarray) -> None:
         self.loads_before = self.loads

@@ -90,6 +90,30 @@ class Load:
         return self.Q + sum(term(t) for term in self.terms) if self.terms else self.Q
 
 
+class MassSolve:
+    """``M^-1 f`` on the dofs that have mass, zero on the massless ones: a 9-node element's nodes
+    on the axis (:attr:`smfem.quad9.Quad9Operators.node_volume`), a contact face's
+    (:func:`smfem.contact.face_free_mass`), whose motion follows the rest quasi-statically (their
+    acceleration enters no inertia force). ``M``: a diagonal (n,) or a sparse mass, whose
+    massless rows are empty; its massive block is factorized once."""
+
+    def __init__(self, M):
+        self.diagonal = isinstance(M, np.ndarray) and M.ndim == 1
+        self.massive = (M if self.diagonal else M.diagonal()) > 0
+        if self.diagonal:
+            self.M = M
+        else:
+            block = sp.csc_matrix(sp.csr_matrix(M)[self.massive][:, self.massive])
+            self.lu = sla.splu(block)
+
+    def __call__(self, f: np.ndarray) -> np.ndarray:
+        if self.diagonal:
+            return np.divide(f, self.M, out=np.zeros_like(f), where=self.massive)
+        out = np.zeros_like(f)
+        out[self.massive] = self.lu.solve(f[self.massive])
+        return out
+
+
 class LinearSystem:
     """``M a + K u = Q`` with one factorization of ``K + a0 M`` per time-step size.
 
@@ -119,8 +143,7 @@ class LinearSystem:
         return sp.diags(scaled_mass) if self.diagonal_mass else scaled_mass
 
     def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
-        force = self.load(0.0) - self.K @ u0
-        return force / self.M if self.diagonal_mass else sla.spsolve(self.M.tocsc(), force)
+        return MassSolve(self.M)(self.load(0.0) - self.K @ u0)
 
     def solve(self, predicted: np.ndarray, u: np.ndarray, step: int, t: float) -> tuple[np.ndarray, int]:
         """``(K + a0 M) u = Q + a0 M predicted``."""

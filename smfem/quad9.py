@@ -3,9 +3,9 @@ points, batched over elements.
 
 Why 9 nodes rather than the 8-node serendipity element: the Lagrange element keeps its full
 biquadratic space under any bilinear (non-affine) map of the section, where the serendipity
-element loses completeness and accuracy on distorted meshes; its lumped masses (the row sums
-``int N_i dV``: 1/36, 4/36, 16/36 of a parallelogram) are all positive, where the serendipity
-element's corners get negative ones; and its nodes are the tensor-product grid of the section
+element loses completeness and accuracy on distorted meshes; its lumped masses (the
+nodal rule, 1/36, 4/36, 16/36 of a parallelogram: :attr:`Quad9Operators.node_volume`) are none negative,
+where the serendipity element's corners get negative ones; and its nodes are the tensor-product grid of the section
 refined once in (s, t) (:func:`cases.section_mesh.section_mesh` with ``order=2``), so supports, edges and
 curved boundaries come for free.
 
@@ -40,6 +40,8 @@ WEIGHTS_1D = np.array([5.0, 8.0, 5.0]) / 18.0
 #: the 3 x 3 Gauss points, the stress sample points, and the share of the element each weighs
 GAUSS_XI, GAUSS_ETA = (a.ravel() for a in np.meshgrid(GAUSS_1D, GAUSS_1D, indexing="ij"))
 GAUSS_WEIGHTS = np.outer(WEIGHTS_1D, WEIGHTS_1D).ravel()
+#: the nodal (3-point Gauss-Lobatto, Simpson) rule's weight of each node, in the nodes' order
+LOBATTO_WEIGHTS = (np.array([1.0, 4.0, 1.0]) / 6.0)[NODE_I] * (np.array([1.0, 4.0, 1.0]) / 6.0)[NODE_J]
 
 
 def lagrange_1d(s):
@@ -98,9 +100,32 @@ class Quad9Operators:
 
     @cached_property
     def node_volume(self) -> np.ndarray:
-        """(ne, 9): the row sums ``int N_i dV`` (all positive for the Lagrange element)."""
-        N, _, _ = shape_functions(GAUSS_XI, GAUSS_ETA)
-        return self.sample_weights @ N
+        """(ne, 9): each node's share of its element's volume, by the element's own nodal rule
+        (the 3 x 3 Gauss-Lobatto points are its nodes: weights 1/6, 4/6, 1/6 per direction)
+        of the volume ``|det J| r``, scaled to the element's volume.
+
+        On a parallelogram with r linear across it these are the row sums ``int N_i dV``
+        (exactly: the rule integrates cubics), 1:4:16 per 36 of a prism. Not the row sums
+        themselves: a node on the axis has ``int N_i r dV = 0`` (r vanishes there and is linear
+        along the element), which round-off leaves of either sign, and an element that widens
+        away from the axis truly negative (``-2 b / 15`` per unit r of a Jacobian
+        ``a + b xi``). A negative mass is an unstable mode that Newmark's average acceleration
+        amplifies more per unit time the smaller the step (a gmsh rod: -8e-7 kg on its axis
+        nodes; its impact blew up at dt 5e-7 s and not at 1e-6). The nodal rule gives every
+        node ``w_i |det J_i| r_i >= 0``: the axis nodes none, exactly (their axial motion has no
+        inertia, as a face's next to the contact layer). HRZ (the diagonal ``int N_i^2 dV``
+        scaled) is positive too, but not a consistent rule of a ring's r-weighted volume: it cut
+        the order of a manufactured motion on a distorted ring section from 3 to 2.2.
+        """
+        X = self.X
+        _, dxi, deta = shape_functions(0.5 * (NODE_I - 1), 0.5 * (NODE_J - 1))  # at the nodes: (9, 9)
+        J = np.stack([np.einsum("gi,eia->ega", dxi, X), np.einsum("gi,eia->ega", deta, X)], axis=3)
+        share = np.abs(np.linalg.det(J)) * LOBATTO_WEIGHTS
+        if self.body == RING:
+            share = share * np.maximum(X[:, :, 0], 0.0)
+        volume = self.sample_weights.sum(axis=1)
+        total = share.sum(axis=1)
+        return share * np.divide(volume, total, out=np.zeros_like(total), where=total > 0)[:, None]
 
     def subset(self, elements) -> "Quad9Operators":
         return Quad9Operators(self.X[elements], self.body)
