@@ -166,6 +166,11 @@ PAIR_SPECS = {
 WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*")
 
 
+def excerpt(text: str, most: int = 60) -> str:
+    """``text`` quoted, cut to ``most`` characters (an expression or a value may run to thousands)."""
+    return repr(text) if len(text) <= most else f"{text[:most]!r}... ({len(text)} characters)"
+
+
 def parse_value(key: str, text: str):
     """Parse the VALUE of ``--set KEY=VALUE`` as a Python literal (``1e-5``, ``true``, ``40``)."""
     if text.lower() in ("true", "false"):
@@ -177,7 +182,7 @@ def parse_value(key: str, text: str):
     except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
         if WORD.fullmatch(text):  # a choice such as element=quad9; the key's spec checks it
             return text
-        raise ParameterError(f"{key}={text!r} is not a value: write a number, true/false or a choice") from None
+        raise ParameterError(f"{key}={excerpt(text)} is not a value: write a number, true/false or a choice") from None
 
 
 def parse_option(key: str, text: str):

@@ -32,7 +32,7 @@ from .case import Case
 from .geometry import (EDGES, PRISM, RING, UNIFORM_SHIFTS, Amplitude, Axis, ContactPair, Cutout, Force, InitialVelocity,
                        Pressure, Probe, Region, Section, Support, Wall)
 from .material import Material
-from .params import COMMON, MAX_STRESS, ParameterError, Spec, UnsupportedCase, failure, validate
+from .params import COMMON, MAX_STRESS, ParameterError, Spec, UnsupportedCase, excerpt, failure, validate
 
 
 def _scene_keys() -> dict[str, Spec]:
@@ -48,6 +48,9 @@ SCENE_KEYS = _scene_keys()
 
 #: [params] keys a file must give; the other common keys default to OPTIONAL
 REQUIRED = ("dt", "t_end", "harmonics", "E", "nu", "rho", "tau_s")
+#: the deepest nesting of arrays and tables a scene file may have (the file itself counts one,
+#: a body's axis breaks five); deeper ones are refused before anything walks them
+MAX_DEPTH = 16
 OPTIONAL = dict(refine=1, plastic=False, tol=1e-5, dim=2)
 #: scene keys the features of the scene read themselves: required with any of them, refused
 #: without all of them (SMFEM's contact layer is a wall's and a contact pair's)
@@ -115,7 +118,25 @@ def from_text(text: str, file: str, overrides: dict | None = None) -> Case:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(_one_line(f"{file}: not valid TOML: {exc}")) from None
+    except RecursionError:  # tomllib reads nested arrays and tables recursively
+        raise ParameterError(f"{file}: arrays or tables nested too deeply to read (a scene file nests at most "
+                             f"{MAX_DEPTH} levels)") from None
+    depth = _depth(doc)
+    if depth > MAX_DEPTH:
+        raise ParameterError(f"{file}: arrays or tables nested {depth} levels deep (a scene file nests at most "
+                             f"{MAX_DEPTH} levels)")
     return _Scene(file, doc).build(overrides or {}, Source(file, text))
+
+
+def _depth(doc) -> int:
+    """How deeply arrays and tables nest in ``doc`` (a value: 0), without recursion."""
+    deepest, stack = 0, [(doc, 1)]
+    while stack:
+        node, level = stack.pop()
+        if isinstance(node, (dict, list)):
+            deepest = max(deepest, level)
+            stack.extend((child, level + 1) for child in (node.values() if isinstance(node, dict) else node))
+    return deepest
 
 
 def _one_line(message: str) -> str:
@@ -123,10 +144,6 @@ def _one_line(message: str) -> str:
     (``\\x1e``, ``\\u2028``, ... besides ``\\n``) and the ones that hide text (``\\u202e``)."""
     return "".join(c if c.isprintable() else c.encode("unicode_escape").decode() for c in message)
 
-
-def _excerpt(text: str, most: int = 60) -> str:
-    """``text`` quoted, cut to ``most`` characters (an expression may run to thousands)."""
-    return repr(text) if len(text) <= most else f"{text[:most]!r}... ({len(text)} characters)"
 
 
 class _Table:
@@ -542,9 +559,9 @@ class _Scene:
                     expressions.parse(text, allowed)
                     manufactured.numeric(text)
                 except expressions.VariableError as exc:
-                    t.fail(key, f"{_excerpt(text)} uses {exc.name}: {key} may use {', '.join(allowed)} only")
+                    t.fail(key, f"{excerpt(text)} uses {exc.name}: {key} may use {', '.join(allowed)} only")
                 except expressions.ExpressionError as exc:
-                    t.fail(key, f"{_excerpt(text)} is not an expression: {exc}")
+                    t.fail(key, f"{excerpt(text)} is not an expression: {exc}")
         self.check_finite(t, pattern, time)
         return Force(tuple(pattern), time, edge, self.amplitude(t))
 
@@ -563,11 +580,11 @@ class _Scene:
                 with np.errstate(all="ignore"):  # an overflow is refused below, not warned of
                     values = np.asarray(numeric(text)(x1, x2, x3, 0.0), float)
             except (ArithmeticError, TypeError, ValueError) as exc:
-                t.fail("pattern", f"{_excerpt(text)} cannot be evaluated inside the body ({failure(exc)})")
+                t.fail("pattern", f"{excerpt(text)} cannot be evaluated inside the body ({failure(exc)})")
             bad = ~np.isfinite(values)
             if bad.any():
                 i, k = np.argwhere(np.broadcast_to(bad, np.broadcast_shapes(x1.shape, x3.shape)))[0]
-                t.fail("pattern", f"{_excerpt(text)} is not finite inside the body (at x1 = {x1[i, 0]:g}, "
+                t.fail("pattern", f"{excerpt(text)} is not finite inside the body (at x1 = {x1[i, 0]:g}, "
                                   f"x2 = {x2[i, 0]:g}, x3 = {x3[k]:g})")
         factor = time_function(time)
         for when in np.linspace(0.0, self.params["t_end"], 201):
@@ -575,9 +592,9 @@ class _Scene:
                 with np.errstate(all="ignore"):  # an overflow is refused below, not warned of
                     value = factor(float(when))
             except (ArithmeticError, TypeError, ValueError) as exc:
-                t.fail("time", f"{_excerpt(time)} cannot be evaluated at t = {when:g} ({failure(exc)})")
+                t.fail("time", f"{excerpt(time)} cannot be evaluated at t = {when:g} ({failure(exc)})")
             if not math.isfinite(value):
-                t.fail("time", f"{_excerpt(time)} is not finite at t = {when:g}")
+                t.fail("time", f"{excerpt(time)} is not finite at t = {when:g}")
 
     def read_variation(self, material: _Table) -> tuple[tuple[float, int], ...]:
         """``variation = [[a, m], ...]``: E and rho times ``1 + sum a cos(m k x3)``."""

@@ -138,6 +138,20 @@ def test_user_mistakes_exit_2_with_one_line(tmp_path, capsys, args, needle):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("command", ["run", "study", "truth"])
+def test_a_scene_file_nested_5000_deep_exits_2_with_one_line(tmp_path, capsys, command):
+    """A value 5000 arrays deep (past the TOML reader's recursion) is one line, as every other
+    reading failure of a scene file."""
+    scene = tmp_path / "deep.toml"
+    scene.write_text('name = "deep"\na = ' + "[" * 5000 + "]" * 5000 + "\n")
+    out = tmp_path / "out"
+    code, err = run_cli([command, str(scene), "--out", str(out)], capsys)
+    assert code == 2
+    assert_one_clear_line(err, "nested too deeply")
+    assert not out.exists()
+    assert "..." in run_cli(["run", "dome", "--set", "dt=" + "[" * 5000], capsys)[1]  # the value cut, not echoed
+
+
 @pytest.mark.parametrize("where", ["under a file", "is a file", "in /proc"])
 @pytest.mark.parametrize("solver", ["smfem", "reference"])
 def test_unwritable_out_exits_2_before_any_work(tmp_path, capsys, monkeypatch, where, solver):

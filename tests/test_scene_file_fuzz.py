@@ -19,6 +19,7 @@ import math
 import tomllib
 import warnings
 from pathlib import Path
+from typing import NamedTuple
 
 import pytest
 from hypothesis import HealthCheck, event, given, settings, strategies as st
@@ -75,8 +76,21 @@ def toml_string(text: str) -> str:
     return f'"{escaped}"'
 
 
+class Nested(NamedTuple):
+    """``value`` inside ``depth`` arrays or inline tables: written without recursion, so that a
+    nesting deeper than Python's recursion limit reaches the reader (found: 5000 arrays deep
+    ended in a RecursionError traceback)."""
+
+    value: object
+    depth: int
+    table: bool
+
+
 def toml_value(value) -> str:
     """One TOML value on one line (tables inline) of what :func:`values` makes."""
+    if isinstance(value, Nested):
+        opening, closing = ('{"a" = ', "}") if value.table else ("[", "]")
+        return opening * value.depth + toml_value(value.value) + closing * value.depth
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, int):
@@ -152,15 +166,22 @@ def nudged(value, factor):
     return scaled
 
 
+#: how deep a value is nested: as a scene file may, a little or far deeper, and past what a
+#: recursive reader takes
+DEPTHS = [1, 3, 20, 300, 5000]
+
+
 def mutate(data, doc: dict) -> dict:
-    """One to three random edits of a copy of ``doc``: delete, rename, add, replace a value, or
-    nudge a number (which more often leaves the rest of the file valid)."""
+    """One to three random edits of a copy of ``doc``: delete, rename, add, replace a value,
+    nudge a number (which more often leaves the rest of the file valid) or nest a value deeply."""
     doc = copy.deepcopy(doc)
     for _ in range(data.draw(st.integers(1, 3))):
         node, key = pick(data, doc)
-        edit = data.draw(st.sampled_from(["delete", "rename", "add", "replace", "nudge"]))
+        edit = data.draw(st.sampled_from(["delete", "rename", "add", "replace", "nudge", "nest"]))
         if edit == "nudge" and key is not None and isinstance(node[key], (int, float)):
             node[key] = nudged(node[key], data.draw(st.sampled_from(NUDGES)))
+        elif edit == "nest" and key is not None:
+            node[key] = Nested(node[key], data.draw(st.sampled_from(DEPTHS)), data.draw(st.booleans()))
         elif key is None or edit == "add":
             if isinstance(node, dict):
                 node[data.draw(text_values | st.sampled_from(["edge", "time", "pattern", "mode", "kind"]))] = \
@@ -253,3 +274,15 @@ def test_a_line_break_in_a_key_or_a_value_is_escaped(separator):
             from_text(dumps(doc), FILE)
         message = str(refusal.value)
         assert len(message.splitlines()) == 1 and separator not in message, message
+
+
+@pytest.mark.parametrize("table", [False, True])
+@pytest.mark.parametrize("depth", [17, 300, 5000])
+def test_a_deeply_nested_value_is_one_line(depth, table):
+    """Arrays or inline tables nested past the scene's schema (MAX_DEPTH) or past the reader's
+    recursion: one line naming the file, as every other reading failure."""
+    doc = {**DOCUMENTS[0], "a": Nested(1, depth, table)}
+    with pytest.raises(ParameterError) as refusal:
+        from_text(dumps(doc), FILE)
+    message = str(refusal.value)
+    assert len(message.splitlines()) == 1 and message.startswith(f"{FILE}: ") and "nested" in message, message
