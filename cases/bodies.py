@@ -8,11 +8,16 @@ named region (its physical surface: a ``body_mean`` probe's ``region``, a materi
 ``'b.e'``. Every solver takes it as it takes any mesh section; ``refine = k`` splits each element
 k x k, so the two faces of a pair stay node for node at every refinement.
 
+A gmsh mesh section may hold several bodies too (:mod:`cases.msh_section`): physical surfaces
+that are connected pieces sharing no node, their physical curves named ``'body.edge'``.
+
 A contact pair (:class:`~cases.geometry.ContactPair`) joins ``face`` of one body to ``other`` of
 another. :func:`pair_faces` finds, for every node of ``face``, the node of ``other`` across it
 (along the face's outward normal) and the initial gap there; :func:`check_pairs` refuses, in one
-line, a pair that names one body twice, a face that borders nothing (a node of it faces no node
-of the other face) and bodies that overlap by more than the pair's stated interference.
+line, a pair that names one body twice, a face that is not its body's edge, bodies that are not
+separate (one piece), a face that borders nothing (a node of it faces no node of the other face)
+and bodies that overlap by more than the pair's stated interference; :func:`check_touching`
+refuses bodies of a gmsh section that touch where no pair joins them.
 """
 
 from __future__ import annotations
@@ -143,9 +148,10 @@ def pair_faces(mesh, pair) -> FacePairing:
 
 def check_pairs(case) -> None:
     """Refuse (:class:`UnsupportedCase`, one line) a scene's contact pairs that no solver should
-    take: an edge that is not the section's, a pair within one body, a face that borders
-    nothing, a gap beyond :data:`MAX_CLEARANCE` of the face, an overlap beyond the pair's
-    stated interference, a face in two pairs."""
+    take: an edge that is not the section's, a pair within one body, a face that is not an
+    edge of its body, two bodies that are one piece (they share nodes), a face that borders
+    nothing, a gap beyond :data:`MAX_CLEARANCE` of the face, an overlap beyond the pair's stated
+    interference, a face in two pairs."""
     section = case.section
     edges = getattr(section, "edges", {})
     bodies = getattr(section, "regions", {})
@@ -155,13 +161,15 @@ def check_pairs(case) -> None:
         for edge in (pair.face, pair.other):
             if edge not in edges or body_of(edge) not in bodies:
                 raise UnsupportedCase(f"{case.name}: {name}: {edge!r} is not a face of one of the scene's bodies "
-                                      f"(its edges: {', '.join(edges) or 'none'})")
+                                      f"(its edges: {', '.join(edges) or 'none'}; a body's edge is named "
+                                      "'body.edge')")
             if edge in seen:
                 raise UnsupportedCase(f"{case.name}: {name}: the face {edge} is in two contact pairs")
             seen.add(edge)
         if body_of(pair.face) == body_of(pair.other):
             raise UnsupportedCase(f"{case.name}: {name}: both faces are of the body {body_of(pair.face)!r}: a pair "
                                   "joins two bodies")
+        _check_separate(case.name, name, section, pair)
         if not (np.isfinite(pair.friction) and pair.friction >= 0 and np.isfinite(pair.interference)
                 and pair.interference >= 0):
             raise UnsupportedCase(f"{case.name}: {name}: friction and interference must be finite and >= 0")
@@ -180,3 +188,42 @@ def check_pairs(case) -> None:
         if pairing.gap.max() > MAX_CLEARANCE * length:
             raise UnsupportedCase(f"{case.name}: {name}: the faces are {pairing.gap.max():.6g} apart, more than "
                                   f"{MAX_CLEARANCE:.0%} of the face's length: the face borders nothing")
+
+
+def _check_separate(case_name: str, name: str, section, pair) -> None:
+    """Refuse a pair whose two bodies are one piece of the section (a mesh section's bodies
+    share no node), or whose faces are not edges of their bodies (physical surfaces)."""
+    pieces = [np.unique(section.pieces[section.regions[body_of(e)]]) for e in (pair.face, pair.other)]
+    if np.intersect1d(*pieces).size:
+        raise UnsupportedCase(f"{case_name}: {name}: the bodies {body_of(pair.face)!r} and {body_of(pair.other)!r} "
+                              "are one piece of the mesh (they share nodes): a pair joins separate bodies (gmsh: "
+                              "two surfaces that share no curve, without Coherence or fragment)")
+    for edge in (pair.face, pair.other):
+        owner = section.edge_owner[edge]
+        stray = owner[~np.isin(owner, section.regions[body_of(edge)])]
+        if len(stray):
+            centre = section.x[section.elements[stray[0], 8]]
+            raise UnsupportedCase(f"{case_name}: {name}: {edge!r} is not an edge of the body {body_of(edge)!r}: its "
+                                  f"element at ({centre[0]:.6g}, {centre[1]:.6g}) is not (put the curve on the "
+                                  "boundary of that physical surface)")
+
+
+def check_touching(case_name: str, section, contacts) -> None:
+    """Refuse (:class:`UnsupportedCase`, one line) bodies of a mesh section that touch (nodes at
+    one point in two pieces, :attr:`cases.msh_section.MeshSection.touching`) where no contact
+    pair's face is: two surfaces meshed apart would otherwise pass through each other, where
+    most likely one body was meant (gmsh: Coherence)."""
+    touching = section.touching
+    if not len(touching):
+        return
+    faces = [section.edges[e] for p in contacts for e in (p.face, p.other) if e in section.edges]
+    on_faces = np.unique(np.concatenate(faces)) if faces else np.empty(0, np.int64)
+    loose = np.flatnonzero(~np.all(np.isin(touching, on_faces), axis=1))
+    if len(loose):
+        a, b = touching[loose[0]]
+        elements = [np.argmax(np.any(section.elements == n, axis=1)) for n in (a, b)]
+        names = " and ".join(repr(next(n for n, ids in section.regions.items() if e in ids)) for e in elements)
+        x1, x2 = section.x[a]
+        raise UnsupportedCase(f"{case_name}: the bodies {names} touch at (x1, x2) = ({x1:.6g}, {x2:.6g}) where no "
+                              "[[contact]] pair joins them: add a pair of their faces (physical curves 'body.edge'), "
+                              "or make them one body (gmsh: Coherence)")

@@ -11,6 +11,11 @@ regions (materials).
 every mesh a solver could not use as it is: triangles, incomplete quadrilaterals, mixed orders,
 a third coordinate, degenerate or inverted elements, cracks and hanging nodes, lines that are
 not element edges, overlapping or empty groups. Clockwise elements are reordered silently.
+
+A mesh may hold several bodies: connected pieces that share no node (:attr:`MeshSection.pieces`),
+each its own physical surface. Two such bodies may touch, a row of nodes of each at the same
+places (:attr:`MeshSection.touching`; a contact pair joins them, :mod:`cases.bodies`); two nodes
+at one point within one piece, or in two pieces of one physical surface, are a crack.
 """
 
 from __future__ import annotations
@@ -24,6 +29,9 @@ from typing import ClassVar
 
 import meshio
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from cases.params import UnsupportedCase, failure, one_line
 
@@ -363,6 +371,20 @@ class MeshSection:
             f"(by about {gap:.3g}): move it inside"))
 
     @cached_property
+    def pieces(self) -> np.ndarray:
+        """The connected piece each element is in, ``(n_el,)`` int: elements sharing a node are
+        of one piece (the bodies of a section of several share none)."""
+        return _pieces(self.elements, len(self.x))
+
+    @cached_property
+    def touching(self) -> np.ndarray:
+        """Where bodies touch: the pairs of nodes at one point (within round-off) in different
+        pieces, ``(n, 2)`` int, the lower id first."""
+        pairs = _coincident(self.x, COINCIDENT * _size(self.x))
+        piece = _node_labels(self.elements, self.pieces, len(self.x))
+        return pairs[piece[pairs[:, 0]] != piece[pairs[:, 1]]]
+
+    @cached_property
     def _buckets(self):
         """The elements by the cells of a uniform grid that their boxes overlap (:func:`_pairs`),
         made on the first :meth:`locate`."""
@@ -524,8 +546,9 @@ def read_msh(path, body: str = "ring") -> MeshSection:
     elements = _counter_clockwise(x, elements, refuse)
     regions = _regions(x, elements, groups, refuse)  # first: it names duplicated elements' groups
     _check_nodes(x, elements, refuse)
-    _check_hanging(x, elements, size, refuse)
-    _check_coincident(x[:n_file], size, refuse)
+    pieces = _pieces(elements, len(x))
+    _check_hanging(x, elements, pieces, size, refuse)
+    _check_coincident(x, n_file, elements, pieces, regions, size, refuse)
     edges, owners = _edges(x, elements, lines, groups, refuse)
     return MeshSection(x, elements, source_order, edges, owners, regions, where)
 
@@ -673,13 +696,15 @@ def _check_nodes(x, elements, refuse):
                      "part of the section once")
 
 
-def _check_hanging(x, elements, size, refuse):
+def _check_hanging(x, elements, pieces, size, refuse):
     """Refuse an element corner lying in the interior of another element's edge (off its end
     nodes): the elements on either side would not share that corner's displacement. Only edges
-    on one element are candidates (a conforming neighbour shares the corner)."""
+    on one element are candidates (a conforming neighbour shares the corner). Between two
+    bodies (pieces ``(n_el,)``) that touch, their nodes do not face each other there."""
     sides = _sides(elements)
     mids, count = np.unique(sides[:, 1], return_counts=True)
-    seg = sides[np.isin(sides[:, 1], mids[count == 1])]
+    alone = np.isin(sides[:, 1], mids[count == 1])
+    seg, seg_piece = sides[alone], np.repeat(pieces, 4)[alone]
     a, m, b = x[seg[:, 0]], x[seg[:, 1]], x[seg[:, 2]]
     d1, d2 = (b - a) / 2, (a + b) / 2 - m  # the edge curve: m + s d1 + s^2 d2, s in [-1, 1]
     tol = OUTSIDE * size
@@ -707,8 +732,11 @@ def _check_hanging(x, elements, size, refuse):
                               & (np.linalg.norm(q - b[e], axis=1) > tol))
         if len(hang):
             h = hang[0]
-            raise refuse(f"element corner at {_at(q[h])} lies inside the element edge from "
-                         f"{_at(a[e[h]])} to {_at(b[e[h]])} (a hanging node): {CONFORM}")
+            where = f"element corner at {_at(q[h])} lies inside the element edge from {_at(a[e[h]])} to {_at(b[e[h]])}"
+            if _node_labels(elements, pieces, len(x))[node[i[h]]] != seg_piece[e[h]]:
+                raise refuse(f"{where} of another body: where two bodies touch, mesh their faces node for "
+                             "node (gmsh: transfinite curves of one count), or make them one body (Coherence)")
+            raise refuse(f"{where} (a hanging node): {CONFORM}")
 
 
 def _dot(u, v) -> np.ndarray:
@@ -716,19 +744,50 @@ def _dot(u, v) -> np.ndarray:
     return np.einsum("nc,nc->n", u, v)
 
 
-def _check_coincident(x, size, refuse):
-    """Refuse two nodes at one point: elements meeting there are not connected. Points within
-    ``tol`` in each coordinate share a cell of a grid of spacing ``2 tol`` in at least one of
-    four shifts of it."""
-    tol = COINCIDENT * size
-    for shift in ((0, 0), (0.5, 0), (0, 0.5), (0.5, 0.5)):
-        cell = np.floor(x / (2 * tol) + shift).astype(np.int64)
-        _, first, group = np.unique(cell, axis=0, return_index=True, return_inverse=True)
-        mate = first[group.ravel()]  # the first node in each one's cell
-        other = np.flatnonzero((mate != np.arange(len(x))) & np.all(np.abs(x - x[mate]) <= tol, axis=1))
-        if len(other):
-            raise refuse(f"element edges at (x1, x2) = {_at(x[other[0]])} are not connected (a crack "
-                         f"or duplicated nodes): {MERGE}")
+def _pieces(elements, n_nodes: int) -> np.ndarray:
+    """The connected piece of each element, ``(n_el,)``: elements sharing a node are of one."""
+    n_el = len(elements)
+    el = np.repeat(np.arange(n_el), elements.shape[1])
+    graph = sp.coo_matrix((np.ones(el.size), (el, n_el + elements.ravel())), shape=(n_el + n_nodes,) * 2)
+    return connected_components(graph, directed=False)[1][:n_el]
+
+
+def _node_labels(elements, labels, n_nodes: int) -> np.ndarray:
+    """Each node's label of an element holding it (its piece: one for all), ``(n_nodes,)``."""
+    out = np.full(n_nodes, -1, np.int64)
+    out[elements] = np.asarray(labels)[:, None]
+    return out
+
+
+def _coincident(x, tol: float) -> np.ndarray:
+    """The pairs of nodes within ``tol`` of each other in each coordinate, ``(n, 2)``, lower
+    id first."""
+    pairs = np.asarray(cKDTree(x).query_pairs(tol, p=np.inf, output_type="ndarray"), np.int64).reshape(-1, 2)
+    return pairs[np.lexsort(pairs.T[::-1])]
+
+
+def _check_coincident(x, n_file, elements, pieces, regions, size, refuse):
+    """Refuse two of the file's nodes (the first ``n_file``) at one point in one piece (elements
+    meeting there are not connected), or in two pieces of one physical surface (one body meshed
+    twice, not joined). Nodes at one point in two pieces of two surfaces are two bodies that
+    touch."""
+    pairs = _coincident(x[:n_file], COINCIDENT * size)
+    if not len(pairs):
+        return
+    piece = _node_labels(elements, pieces, len(x))[pairs]
+    label = np.empty(len(elements), np.int64)
+    for j, ids in enumerate(regions.values()):
+        label[ids] = j
+    surface = _node_labels(elements, label, len(x))[pairs]
+    one = np.flatnonzero((piece[:, 0] == piece[:, 1]) | (surface[:, 0] == surface[:, 1]))
+    if len(one):
+        k = one[0]
+        where = f"element edges at (x1, x2) = {_at(x[pairs[k, 0]])} are not connected"
+        if piece[k, 0] == piece[k, 1]:
+            raise refuse(f"{where} (a crack or duplicated nodes): {MERGE}")
+        name = list(regions)[surface[k, 0]]
+        raise refuse(f"{where} (a crack or duplicated nodes: two parts of {name!r} touch there): {MERGE}; "
+                     "bodies that touch are physical surfaces of their own")
 
 
 def _regions(x, elements, groups, refuse) -> dict[str, np.ndarray]:

@@ -2,12 +2,12 @@
 
 A file describes one body of revolution (``body = "ring"``) or prism (``body = "prism"``) with
 the pieces of :mod:`cases.geometry`, or several such bodies (``[[bodies]]``, one mapped block
-each, assembled by :func:`cases.bodies.assemble`) and the contact pairs between their faces
-(``[[contact]]``). Its ``[params]`` are checked by the specs of ``--set``
-(:data:`cases.params.COMMON` and the built-in scenes' own keys) and then merged with the
-overrides by :func:`cases.params.validate`, the one path of ``--set``. Any number of the scene
-may be written as the name of a parameter in quotes (``q = "q"``, ``value = "-v0"``): it then
-follows ``--set``.
+each, assembled by :func:`cases.bodies.assemble`, or the physical surfaces of a gmsh mesh
+section that share no node) and the contact pairs between their faces (``[[contact]]``). Its
+``[params]`` are checked by the specs of ``--set`` (:data:`cases.params.COMMON` and the
+built-in scenes' own keys) and then merged with the overrides by :func:`cases.params.validate`,
+the one path of ``--set``. Any number of the scene may be written as the name of a parameter in
+quotes (``q = "q"``, ``value = "-v0"``): it then follows ``--set``.
 
 An angle may name a parameter in degrees: ``"patch_deg deg"`` is its value in radians.
 
@@ -27,7 +27,7 @@ from types import SimpleNamespace
 
 from . import (dome, flywheel, layered_cylinder, moving_load, notched_cylinder, notched_strip, rod_collision,
                rod_impact, thick_cylinder)
-from .bodies import Body, assemble, body_of, check_pairs
+from .bodies import Body, assemble, body_of, check_pairs, check_touching
 from .case import Case
 from .geometry import (EDGES, PRISM, RING, UNIFORM_SHIFTS, Amplitude, Axis, ContactPair, Cutout, Force, InitialVelocity,
                        Pressure, Probe, Region, Section, Support, Wall)
@@ -657,11 +657,12 @@ class _Scene:
     def read_contacts(self, tables: list[_Table]) -> tuple[ContactPair, ...]:
         """``[[contact]]``: a face of one body against a face of another (``'body.edge'``), each
         face in one pair at most, their geometry checked as :func:`cases.bodies.check_pairs`
-        checks it (faces that face each other node for node, overlapping by no more than the
-        stated ``interference``)."""
-        if tables and not self.bodies:
-            self.fail("contact", "a contact pair joins two bodies: give them as [[bodies]] tables (a rigid wall is "
-                                 "[wall])")
+        checks it (faces of separate bodies that face each other node for node, overlapping by
+        no more than the stated ``interference``). The bodies of a gmsh section touch nowhere
+        else (:func:`cases.bodies.check_touching`)."""
+        if tables and self.section.kind != "mesh":
+            self.fail("contact", "a contact pair joins two bodies: give them as [[bodies]] tables, or as physical "
+                                 "surfaces of a mesh section (a rigid wall is [wall])")
         pairs: list[ContactPair] = []
         for t in tables:
             face, other = self.edge(t, "face"), self.edge(t, "other")
@@ -674,6 +675,11 @@ class _Scene:
             pairs.append(ContactPair(face, other, t.number("friction", 0.0, lo=0.0),
                                      t.number("interference", 0.0, lo=0.0)))
             self.check_pair(t, pairs[-1])
+        if not self.bodies and self.section.kind == "mesh":
+            try:
+                check_touching(self.file, self.section, pairs)
+            except UnsupportedCase as exc:
+                self.fail("section.file", str(exc).removeprefix(f"{self.file}: "))
         return tuple(pairs)
 
     def check_pair(self, t: _Table, pair: ContactPair) -> None:

@@ -364,6 +364,12 @@ def refusal(tmp_path, case):
     if case == "crack":
         return squares(tmp_path, "crack.msh", UNIT + [[1, 0], [2, 0], [2, 1], [1, 1]],
                        [[0, 1, 2, 3], [4, 5, 6, 7]])
+    if case == "crack in one piece":  # joined at the bottom, the top node duplicated
+        return squares(tmp_path, "slit.msh", [[0, 0], [1, 0], [2, 0], [2, 1], [1, 1], [1, 1], [0, 1]],
+                       [[0, 1, 4, 6], [1, 2, 3, 5]])
+    if case == "hanging across bodies":  # two separate pieces touching along x = 1, not node for node
+        return squares(tmp_path, "bodies.msh", UNIT + [[1, 0], [2, 0], [2, 0.5], [1, 0.5], [2, 1], [1, 1]],
+                       [[0, 1, 2, 3], [4, 5, 6, 7], [7, 6, 8, 9]])
     if case == "hanging":
         return squares(tmp_path, "hanging.msh",
                        [[0, 0], [1, 0], [1, 2], [0, 2], [2, 0], [2, 1], [2, 2], [1, 1]],
@@ -397,7 +403,9 @@ REFUSALS = {
     "dart": "element 0 .* is degenerate or inverted",
     "bow tie": "element 0 .* is degenerate or inverted",
     "crack": r"element edges at \(x1, x2\) = \(1, [01]\) are not connected \(a crack or duplicated",
+    "crack in one piece": r"edges at \(x1, x2\) = \(1, 1\) are not connected \(a crack or duplicated nodes\): merge",
     "hanging": r"corner at \(1, 1\) .* \(a hanging node\)",
+    "hanging across bodies": r"corner at \(1, 0.5\) .* of another body: where two bodies touch, mesh their faces node",
     "overlap": "elements overlap along the edge",
     "split mid-side": r"elements on the edge from \(2, 0\) to \(2, 1\) have different mid-side nodes",
 }
