@@ -89,6 +89,28 @@ def collision_histories(t, E: float, rho: float, v0: float) -> dict[str, np.ndar
             "target_vz": th["target_v_after"] * share, "target_end_uz": end_uz}
 
 
+def pulse_errors(t, history, E: float, rho: float, v0: float, window: float) -> dict[str, float]:
+    """The stress pulses of a run (``history['contact_p']``, ``history['target_mid_szz']`` at
+    times ``t``) against the one-dimensional answer's (nu = 0), as relative deviations: each
+    pulse's level (its mean over the contact, at mid-length over the first pulse's passage, a
+    ``window`` in from either end) and its duration (its impulse over the answer's level: the
+    contact's over the whole run, the mid-length's up to the end of the first pulse, which the
+    reflected tension follows at once). A discrete front is smeared over a few elements, so a
+    max-norm across the jump of the stress would judge the smearing, not the pulse."""
+    t = np.asarray(t, float)
+    th = collision_theory(E, rho, v0)
+    s, T = th["stress"], th["t_contact"]
+    arrive = 0.5 * TARGET / th["c"]
+    out = {}
+    for name, start, upto in (("contact_p", 0.0, np.inf), ("target_mid_szz", arrive, arrive + T)):
+        x = np.asarray(history[name], float)
+        level = x[(t > start + window) & (t < start + T - window)].mean()
+        first = t <= upto
+        out[f"{name}_level"] = level / s - 1
+        out[f"{name}_duration"] = np.trapezoid(x[first], t[first]) / s / T - 1
+    return out
+
+
 def build(p: dict) -> Case:
     section = assemble(sections(), path=NAME)
     probes = (

@@ -14,7 +14,7 @@ from cases.bodies import Body, assemble
 from cases.case import Case
 from cases.geometry import RING, Axis, Pressure, Probe, Section, Support
 from cases.params import UnsupportedCase
-from cases.rod_collision import RADIUS, collision_histories, collision_theory, sections
+from cases.rod_collision import RADIUS, collision_histories, pulse_errors, sections
 from smfem.runs.errors import history_errors
 from smfem.checks import contact_static_probes, static_probes
 from smfem.solver import solve
@@ -22,12 +22,6 @@ from smfem.solver import solve
 AREA = math.pi * RADIUS**2
 #: the scene on a gmsh section of two bodies (cases/sections/rod_collision.py)
 UNSTRUCTURED = str(Path(__file__).resolve().parents[1] / "examples" / "rod_collision_unstructured.toml")
-
-
-def _plateau(t, x, start, end, margin):
-    """The mean of ``x`` over ``[start + margin, end - margin]``."""
-    inside = (t > start + margin) & (t < end - margin)
-    return x[inside].mean()
 
 
 @pytest.mark.parametrize("scene", ["rod_collision", UNSTRUCTURED])
@@ -38,26 +32,18 @@ def test_nu0_collision_against_one_dimensional_theory(scene):
     refine 4 for 0.3 %). The stresses' fronts are smeared over a few elements, as in every
     discrete model, so a stress is judged by its level and its duration (its impulse over its
     level), not by its max-norm across a jump of 2 rho c v0 / 2 (measured: 16 % at this setting,
-    6 % at refine 2): contact_p's plateau 0.013 %, duration 0.35 %; target_mid_szz's -0.053 %,
+    6 % at refine 2): contact_p's level 0.012 %, duration 0.35 %; target_mid_szz's -0.053 %,
     -0.66 % (both sections)."""
     case = get_case(scene, {"nu": 0.0, "element": "quad9", "dt": 5e-7})
     r = solve(case)
     assert r.converged, r.message
     E, rho, v0 = case.material.E, case.material.rho, case.params["v0"]
     exact = collision_histories(r.t, E, rho, v0)
-    th = collision_theory(E, rho, v0)
     window = case.references["comparison_window_s"]
     for name in ("striker_vz", "target_vz", "target_end_uz"):
         assert history_errors(r.t, r.history[name], r.t, exact[name], window)[0] < 0.005, name
-    c, s, T = th["c"], th["stress"], th["t_contact"]
-    p = r.history["contact_p"]
-    assert _plateau(r.t, p, 0.0, T, window) == pytest.approx(s, rel=0.02)
-    assert np.trapezoid(p, r.t) / s == pytest.approx(T, rel=0.02)  # the contact's duration
-    mid = r.history["target_mid_szz"]
-    arrive = 0.5 / c
-    assert _plateau(r.t, mid, arrive, arrive + T, window) == pytest.approx(s, rel=0.02)
-    first = r.t <= arrive + T  # the first pulse: the reflected tension follows it at once
-    assert np.trapezoid(mid[first], r.t[first]) / s == pytest.approx(T, rel=0.02)
+    for name, deviation in pulse_errors(r.t, r.history, E, rho, v0, window).items():
+        assert abs(deviation) <= 0.02, name  # contact_p and target_mid_szz: level and duration
     # momentum: striker + target, conserved to round-off (measured 1.7e-11 mapped, 2.0e-12 gmsh)
     momentum = rho * AREA * (0.5 * r.history["striker_vz"] + 1.0 * r.history["target_vz"])
     assert np.abs(momentum / momentum[0] - 1).max() < 1e-6
