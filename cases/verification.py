@@ -101,8 +101,13 @@ def build(body: str, params: dict | None = None) -> Case:
 def exact(case, t: np.ndarray) -> dict[str, np.ndarray]:
     """The probes' exact histories at times ``t``."""
     U, time = motion(case.body, case.params.get("free_top", False)), time_function(case.params.get("time", "cos"))
+    return probe_histories(case.probes, U, time, t)
+
+
+def probe_histories(probes, U: list, time, t: np.ndarray) -> dict[str, np.ndarray]:
+    """Point probes' histories at times ``t`` of the motion ``U`` (body components) times ``time``."""
     out = {}
-    for probe in case.probes:
+    for probe in probes:
         x1, x2, x3 = probe.point
         value = (U[probe.component[0] - 1] * time).subs({mf.X1: x1, mf.X2: x2, mf.X3: x3})
         out[probe.name] = np.asarray(sp.lambdify(mf.T, value, "numpy")(np.asarray(t, float)), float) + 0.0 * t

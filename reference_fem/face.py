@@ -8,15 +8,18 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
-from skfem import FacetBasis
 
 from cases.params import UnsupportedCase
 
+from . import ties
 from .frames import AXISYMMETRIC
 from .model import INTORDER
 
 #: tolerance of the planarity check, relative to the largest mesh coordinate
 PLANE_TOL = 1e-9
+#: how far inside a facet (in its reference coordinates) its nodes' normals are taken on a mesh
+#: degenerate on the axis
+AXIS_INSET = 1e-6
 
 
 @dataclass(frozen=True)
@@ -65,13 +68,13 @@ def _plane(model, edge: str) -> PlaneFace | None:
     """The plane face on ``edge``, or None where it is not plane."""
     mesh = model.rmesh.mesh
     facets = model.edge_facets(edge)
-    fb = FacetBasis(mesh, model.element, facets=facets, intorder=INTORDER)
+    fb = ties.facet_basis(mesh, model.element, facets=facets, intorder=INTORDER)
     n = np.asarray(fb.normals).reshape(model.dim, -1)
     normal = n.mean(axis=1)
     normal /= np.linalg.norm(normal)
     nodes = np.unique(model.basis.get_dofs(facets=facets).all("u^1") // model.dim)
-    height = normal @ mesh.doflocs[:, nodes]
-    size = np.abs(mesh.doflocs).max()
+    height = normal @ model.nodes_x[:, nodes]
+    size = np.abs(model.nodes_x).max()
     if np.abs(n - normal[:, None]).max() > 1e-6 or np.ptp(height) > PLANE_TOL * size:
         return None
     return PlaneFace(nodes, normal, float(height.mean()), _area(model, fb))
@@ -93,19 +96,22 @@ def face_of(model, edge: str) -> Face:
         return Face(plane.nodes, np.broadcast_to(plane.normal, (plane.nodes.size, model.dim)), plane.area)
     mesh, dim = model.rmesh.mesh, model.dim
     facets = model.edge_facets(edge)
-    # a rule whose points are the facet's own nodes: (0, 1/2, 1) along each of its directions
-    line = np.array([0.0, 0.5, 1.0])
+    # a rule whose points are the facet's own nodes: (0, 1/2, 1) along each of its directions;
+    # on a mesh with hexahedra degenerate on the axis (reference_fem.ties) a hair inside them,
+    # where the map's Jacobian is not singular (each point still nearest its node)
+    inset = AXIS_INSET if ties.node_ids(mesh) is not None else 0.0
+    line = np.array([inset, 0.5, 1.0 - inset])
     points = np.array([g.ravel() for g in np.meshgrid(*([line] * (dim - 1)), indexing="ij")])
-    at_nodes = FacetBasis(mesh, model.element, facets=facets, quadrature=(points, np.ones(points.shape[1])))
+    at_nodes = ties.facet_basis(mesh, model.element, facets=facets, quadrature=(points, np.ones(points.shape[1])))
     n = np.asarray(at_nodes.normals).reshape(dim, -1)
     x = np.asarray(at_nodes.global_coordinates()).reshape(dim, -1)
     nodes = np.unique(model.basis.get_dofs(facets=facets).all("u^1") // dim)
     # each point is one of the face's nodes (one body's: no two at one place)
-    which = cKDTree(mesh.doflocs[:, nodes].T).query(x.T)[1]
+    which = cKDTree(model.nodes_x[:, nodes].T).query(x.T)[1]
     normals = np.zeros((nodes.size, dim))
     np.add.at(normals, which, n.T)
     normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-    fb = FacetBasis(mesh, model.element, facets=facets, intorder=INTORDER)
+    fb = ties.facet_basis(mesh, model.element, facets=facets, intorder=INTORDER)
     return Face(nodes, normals, _area(model, fb))
 
 

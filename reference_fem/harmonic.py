@@ -259,14 +259,14 @@ class HarmonicModel:
             K = K + K_part
             m = m + self.phi.T @ W @ self.phi * material.rho
         M = sp.block_diag([c1 * m, c1 * m, c2 * m])
-        free = self._free(l)
-        if free.size == 0:
+        T = self._reduction(l)
+        if T.shape[1] == 0:
             return None
-        K, M = sp.csr_matrix(K)[free][:, free], sp.csr_matrix(M)[free][:, free]
+        K, M = ((T.T @ sp.csr_matrix(A) @ T).tocsr() for A in (K, M))
         K.eliminate_zeros()
         M.eliminate_zeros()
-        terms = [LoadTerm(term.Q[free], term.factor, term.kinks, term.rate) for term in terms]
-        return Harmonic(l, K.tocsr(), M.tocsr(), Q[free], self._probe_rows(l)[:, free], terms)
+        terms = [LoadTerm(T.T @ term.Q, term.factor, term.kinks, term.rate) for term in terms]
+        return Harmonic(l, K, M, T.T @ Q, self._probe_rows(l) @ T, terms)
 
     def _load(self, l: int, loads=None) -> np.ndarray:
         """Load amplitudes ``(3 n,)`` for harmonic ``l`` of ``loads`` (default: the case's
@@ -330,8 +330,33 @@ class HarmonicModel:
         size = max(abs(a) for a in axis.span) or 1.0
         return facets[np.all(np.abs(v - target) < 1e-8 * size, axis=0)]
 
+    def _reduction(self, l: int) -> sp.csr_matrix:
+        """``T`` (3 n, n_free): the amplitudes of harmonic ``l`` from its free ones (:meth:`_free`),
+        and on a ring's axis the conditions under which the harmonic is one motion there
+        (single-valued in Cartesian components): l = 0, u_r = 0; l = 1, u_z = 0 and u_theta =
+        -u_r (U cos, -U sin: the axis's lateral translation, V follows U); l >= 2, none moves."""
+        n3 = N_COMP * self.tie.shape[1]
+        free = self._free(l)
+        T = sp.csr_matrix((np.ones(free.size), (free, np.arange(free.size))), shape=(n3, free.size))
+        axis = self._axis_nodes() if self.case.body == RING and l == 1 else np.zeros(0, int)
+        if axis.size:  # V = -U at each axis node: V's row takes U's column, negated
+            n = self.tie.shape[1]
+            column = np.full(n3, -1)
+            column[free] = np.arange(free.size)
+            u_col = column[axis]
+            keep = u_col >= 0
+            T = T + sp.csr_matrix((-np.ones(keep.sum()), (2 * n + axis[keep], u_col[keep])), shape=T.shape)
+        return T.tocsr()
+
+    def _axis_nodes(self) -> np.ndarray:
+        """The reduced nodes on a ring's axis (r = 0)."""
+        size = np.abs(self.basis.doflocs).max()
+        return np.unique(self.tie[np.flatnonzero(np.abs(self.basis.doflocs[0]) < 1e-9 * size)].indices)
+
     def _free(self, l: int) -> np.ndarray:
-        """Free amplitude dofs of harmonic ``l``: supports, the axis of a ring, V of l = 0."""
+        """Free amplitude dofs of harmonic ``l``: supports, the axis of a ring (u_r at l = 0, 1
+        is held here and followed by u_theta at l = 1, :meth:`_reduction`; everything at
+        l >= 2), V of l = 0."""
         case, sec = self.case, self.case.section
         n = self.tie.shape[1]
         fixed = np.zeros(N_COMP * n, bool)
@@ -353,11 +378,14 @@ class HarmonicModel:
             for c in support.components:
                 fixed[(c - 1) * n + nodes] = True
         if case.body == RING:
-            size = np.abs(self.basis.doflocs).max()
-            on_axis = reduced_nodes(np.abs(self.basis.doflocs[0]) < 1e-9 * size)
-            if on_axis.size and l > 0:
-                raise UnsupportedCase("harmonic model: harmonics l >= 1 of a section that touches the axis")
-            fixed[on_axis] = True  # l = 0: no radial displacement on the axis
+            on_axis = self._axis_nodes()
+            if l == 1:  # u_theta follows u_r (held where either is supported); no u_z
+                fixed[on_axis] |= fixed[2 * n + on_axis]
+                fixed[2 * n + on_axis] = fixed[n + on_axis] = True
+            else:
+                fixed[on_axis] = True  # no radial displacement on the axis
+            if l >= 2:
+                fixed[n + on_axis] = fixed[2 * n + on_axis] = True
             if l == 0:
                 fixed[2 * n:] = True  # the cos family's l = 0 has no hoop displacement
         return np.flatnonzero(~fixed)

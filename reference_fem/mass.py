@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import CellBasis, asm
+from skfem import asm
 
-from . import forms
+from . import forms, ties
 
 #: Gauss points per direction along the layer (as the model's INTORDER = 4 rule)
 N_GAUSS = 3
@@ -42,7 +42,7 @@ def consistent_mass(basis, rho: float | np.ndarray, axisymmetric: bool, factor: 
     # the scalar element's mass, one copy per component: a vector form would call its kernel for
     # every pair of the element's vector functions, dim^2 times as many (the 3D thick cylinder
     # at refine 2: 2.6 CPU s); dof ``dim * i + c`` is component c at scalar dof i
-    scalar = CellBasis(basis.mesh, basis.elem.elem, quadrature=basis.quadrature, elements=basis.tind)
+    scalar = ties.cell_basis(basis.mesh, basis.elem.elem, quadrature=basis.quadrature, elements=basis.tind)
     r = np.asarray(scalar.global_coordinates())[0] if axisymmetric else np.ones(scalar.dx.shape)
     weight = r * (1.0 if factor is None else factor)
     M = asm(forms.scalar_mass, scalar, rho=density(scalar, rho), weight=weight)
@@ -59,7 +59,7 @@ def lumped_mass(basis, rho: float | np.ndarray, axisymmetric: bool,
     motion then has no inertia) and the total mass is kept. Same units and ``rho`` as
     :func:`consistent_mass`.
     """
-    scalar = CellBasis(basis.mesh, basis.elem.elem, quadrature=basis.quadrature)
+    scalar = ties.cell_basis(basis.mesh, basis.elem.elem, quadrature=basis.quadrature)
     r = np.asarray(scalar.global_coordinates())[0] if axisymmetric else np.ones(scalar.dx.shape)
     w = density(scalar, rho) * scalar.dx * r * (1.0 if factor is None else factor)  # (n_elements, n_qp)
     diag = np.array([np.einsum("eq,eq->e", np.asarray(phi[0]) ** 2, w) for phi in scalar.basis])  # (n_local, nel)
@@ -93,8 +93,8 @@ def redistributed_mass(M: sp.csr_matrix, basis, facets: np.ndarray, rho: float |
     out = M.copy()
     for d in np.unique(normal_dir[local]):
         group = elements[normal_dir[local] == d]
-        standard = CellBasis(mesh, basis.elem, elements=group, intorder=intorder)
-        layer = CellBasis(mesh, basis.elem, elements=group, quadrature=_layer_rule(mesh.dim(), d))
+        standard = ties.cell_basis(mesh, basis.elem, elements=group, intorder=intorder)
+        layer = ties.cell_basis(mesh, basis.elem, elements=group, quadrature=_layer_rule(mesh.dim(), d))
         out = out - consistent_mass(standard, rho, axisymmetric) + consistent_mass(layer, rho, axisymmetric)
     return out.tocsr()
 

@@ -36,6 +36,7 @@ from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
+from scipy.spatial import cKDTree
 from skfem import ElementHex2, ElementQuad2, MeshHex1, MeshHex2, MeshQuad1, MeshQuad2
 from skfem.io.meshio import HEX_MAPPING
 from skfem.mapping import MappingIsoparametric
@@ -43,7 +44,7 @@ from skfem.mapping import MappingIsoparametric
 from cases.params import UnsupportedCase
 from cases.geometry import RING
 
-from . import swept
+from . import swept, ties
 from .frames import AXISYMMETRIC, PLANE_STRAIN, SOLID, in_intervals, representation, section_of, x3_of
 
 #: elements around the circumference of a (non-axisymmetric) ring at refine = 1: the
@@ -57,6 +58,10 @@ OGRID_CORE = 0.4
 
 #: tolerance of the inverse isoparametric map, in reference coordinates
 INVF_TOL = 1e-10
+#: elements tried for a point (nearest centres first) by :meth:`MeshHex2Tied.element_finder`, and
+#: how far from the point (relative to the mesh's size) an element's nearest image may be
+FINDER_CANDIDATES = 32
+INSIDE_TOL = 1e-8
 
 
 class _Mapping(MappingIsoparametric):
@@ -68,6 +73,23 @@ class _Mapping(MappingIsoparametric):
 
     def invF(self, x, tind=None, newton_max_iters=50, newton_tol=INVF_TOL):
         return super().invF(x, tind, newton_max_iters, newton_tol)
+
+
+class _AxisMapping(_Mapping):
+    """:class:`_Mapping` of a mesh with hexahedra degenerate on the axis (:class:`MeshHex2Tied`):
+    its inverse takes Newton's steps by the Jacobian's pseudo-inverse, which on the axis face
+    (a line: one direction of the Jacobian vanishes) moves along the other two, and it stops at
+    the step tolerance without raising; the caller checks how near the point it came."""
+
+    def invF(self, x, tind=None, newton_max_iters=50, newton_tol=INVF_TOL):
+        X = np.zeros(x.shape) + 0.5
+        for _ in range(newton_max_iters):
+            J = np.moveaxis(self.DF(X, tind), (0, 1), (-2, -1))  # (n_elements, n_points, dim, dim)
+            dX = np.moveaxis(np.einsum("...ij,...j->...i", np.linalg.pinv(J), np.moveaxis(x - self.F(X, tind), 0, -1)), -1, 0)
+            X = np.clip(X + dX, 0.0, 1.0)
+            if np.abs(dX).max() < newton_tol:
+                break
+        return X
 
 
 class _Curved:
@@ -113,6 +135,46 @@ def _one(find, centres: np.ndarray, x: float, y: float) -> int:
 @dataclass(repr=False)
 class MeshHex2Curved(_Curved, MeshHex2):
     """:class:`skfem.MeshHex2` with the tolerant inverse mapping."""
+
+
+@dataclass(repr=False)
+class MeshHex2Tied(MeshHex2Curved):
+    """:class:`MeshHex2Curved` whose nodes at one point of the axis are one unknown
+    (:mod:`reference_fem.ties`): ``ties`` (n_nodes,), the node each node is one with."""
+
+    ties: np.ndarray | None = None
+
+    def _mapping(self):
+        if not hasattr(self, "_cached_mapping"):
+            self._cached_mapping = _AxisMapping(self, self.elem(), self.bndelem)
+        return self._cached_mapping
+
+    def element_finder(self, mapping=None):
+        """The element of each point: scikit-fem's finder splits the vertex mesh into
+        tetrahedra, which are flat where a hexahedron is degenerate on the axis; here the
+        elements with the nearest centres are tried, each by inverting its curved map (clipped
+        to the element), and the one whose image of that is nearest the point is taken, if it
+        is the point within round-off."""
+        mapping = self._mapping() if mapping is None else mapping
+        tree = cKDTree(self.doflocs[:, self.dofs.element_dofs[-1]].T)  # the centre nodes
+        candidates = min(FINDER_CANDIDATES, self.nelements)
+        size = np.abs(self.doflocs).max()
+
+        def finder(x, y, z, _search_all=False):
+            points = np.array([x, y, z], float).reshape(3, -1)
+            found = np.empty(points.shape[1], np.int64)
+            for k, point in enumerate(points.T):
+                near = np.arange(self.nelements) if _search_all else tree.query(point, candidates)[1]
+                at = point[:, None, None] + np.zeros((1, len(near), 1))
+                miss = np.linalg.norm(mapping.F(mapping.invF(at, tind=near), tind=near)[:, :, 0] - point[:, None], axis=0)
+                if miss.min() > INSIDE_TOL * size:
+                    if _search_all:
+                        raise ValueError("Point is outside of the mesh.")
+                    return finder(x, y, z, _search_all=True)
+                found[k] = near[np.argmin(miss)]
+            return found
+
+        return finder
 
 
 @dataclass(frozen=True)
@@ -252,7 +314,8 @@ def _mesh_section(case, rep: str) -> RefMesh:
     kept = ~_in_cutouts(case, rep, x[:, :, -1])
     # the section's pieces (the bodies of a scene of several) share no node: nor do their elements here
     pieces = swept.pieces(section)[parent]
-    mesh = mesh_from_points(x[:, kept], groups=pieces[kept])
+    apart = swept.axis_tags(case, section, x3)  # where swept round the axis: its nodes there, tied
+    mesh = mesh_from_points(x[:, kept], groups=pieces[kept], apart=None if apart is None else apart[kept])
     counts = {"section": len(section.elements), **({"x3": len(x3) - 1} if x3 is not None else {}),
               "elements": mesh.nelements}
     return RefMesh(mesh, rep, counts, section, parent[kept])
@@ -471,44 +534,53 @@ def assemble_blocks(blocks, keep: Callable[[np.ndarray], np.ndarray]) -> MeshQua
 
 
 def mesh_from_points(x: np.ndarray, keep: Callable[[np.ndarray], np.ndarray] | None = None,
-                     groups: np.ndarray | None = None) -> MeshQuad2 | MeshHex2:
+                     groups: np.ndarray | None = None, apart: np.ndarray | None = None) -> MeshQuad2 | MeshHex2:
     """Quadratic mesh of elements given by their nodes ``x`` (dim, n_elements, 9 | 27) in the
     order of scikit-fem's reference element (``ElementQuad2`` / ``ElementHex2.doflocs``);
     ``keep(centres)`` selects the elements (None: all), in their order. Coincident nodes are
     merged by position, within one of ``groups`` (n_elements,) only when given: two bodies
-    that touch keep a row of nodes each."""
+    that touch keep a row of nodes each. ``apart`` (n_elements, 27): tags of the nodes that
+    coincident vertices of different tags keep apart in the mesh and tie as unknowns (a 3D
+    mesh's nodes on the axis, one per angle: :class:`MeshHex2Tied`, :mod:`reference_fem.ties`)."""
     pdim = x.shape[0]
     elem, lin_cls, quad_cls = (ElementQuad2, MeshQuad1, MeshQuad2Curved) if pdim == 2 else (ElementHex2, MeshHex1, MeshHex2Curved)
     ref = elem.doflocs
     if keep is not None:
         kept = keep(x[:, :, -1])
         x, groups = x[:, kept], None if groups is None else np.asarray(groups)[kept]
-    x = _positively_oriented(x, ref)
+        apart = None if apart is None else apart[kept]
+    x, flipped = _positively_oriented(x, ref)
     n_vert = elem.refdom.nnodes
     scale = np.abs(x).max()
-    group = None if groups is None else np.repeat(np.asarray(groups, np.int64), n_vert)
-    vid, p = _merge(x[:, :, :n_vert].reshape(x.shape[0], -1), scale, group)
+    keys = [] if groups is None else [np.repeat(np.asarray(groups, np.int64), n_vert)]
+    if apart is not None:
+        apart = np.where(flipped[:, None], apart[:, mirror_permutation(ref)], apart)
+        keys.append(np.asarray(apart, np.int64)[:, :n_vert].ravel())
+    vid, p = _merge(x[:, :, :n_vert].reshape(x.shape[0], -1), scale, np.array(keys) if keys else None)
     lin = lin_cls(np.ascontiguousarray(p), np.ascontiguousarray(vid.reshape(-1, n_vert).T))
-    mesh = quad_cls.from_mesh(lin)
+    mesh = (MeshHex2Tied if apart is not None else quad_cls).from_mesh(lin)
     doflocs = mesh.doflocs.copy()
     doflocs[:, mesh.dofs.element_dofs] = x.transpose(0, 2, 1)
-    return replace(mesh, doflocs=doflocs)
+    if apart is None:
+        return replace(mesh, doflocs=doflocs)
+    return replace(mesh, doflocs=doflocs, ties=ties.tie_coincident(doflocs, mesh.dofs.element_dofs, groups, scale))
 
 
 def _merge(points: np.ndarray, scale: float, group: np.ndarray | None = None):
-    """Ids of coincident points (within 1e-9 ``scale``; of one ``group`` (n,) when given) and the
-    unique points, ``(dim, m)``."""
+    """Ids of coincident points (within 1e-9 ``scale``; of one ``group`` (k, n) of integer keys
+    when given) and the unique points, ``(dim, m)``."""
     key = np.round(points / (1e-9 * scale)).astype(np.int64)
     if group is not None:
-        key = np.vstack([key, group[None, :]])
+        key = np.vstack([key, np.atleast_2d(group)])
     _, first, inverse = np.unique(key.T, axis=0, return_index=True, return_inverse=True)
     return inverse.ravel(), points[:, first]
 
 
 def vtk_cells(mesh: MeshQuad2 | MeshHex2) -> tuple[str, np.ndarray]:
     """The elements as VTK cells, ``('quad9' | 'hexahedron27', (n_elements, 9 | 27))`` node
-    indices; their first 8 or 20 nodes are also Abaqus's CPE8/CAX8 or C3D20 in its order."""
-    cells = mesh.dofs.element_dofs
+    indices (of :func:`reference_fem.ties.node_positions`: a node tied on the axis once); their
+    first 8 or 20 nodes are also Abaqus's CPE8/CAX8 or C3D20 in its order."""
+    cells = ties.cells(mesh)
     if mesh.dim() == 2:
         return "quad9", cells.T
     # scikit-fem's reference hexahedron is left-handed in VTK's node order: mirror it
@@ -522,12 +594,18 @@ def mirror_permutation(ref: np.ndarray) -> list[int]:
     return [int(np.argmin(np.abs(ref - m).sum(axis=1))) for m in mirrored]
 
 
-def _positively_oriented(x: np.ndarray, ref: np.ndarray) -> np.ndarray:
-    """Reorder the local nodes of elements whose map reverses orientation (mirror in xi_1)."""
+def _positively_oriented(x: np.ndarray, ref: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Reorder the local nodes of elements whose map reverses orientation (mirror in xi_1);
+    also which were. The orientation is the map's at the element's centre, whose derivative
+    along each reference direction is the difference of the two nodes on that line through the
+    centre (the quadratic functions' slopes there are -1, 0, 1): a hexahedron degenerate on the
+    axis has an edge of zero length at its corners, not there."""
     pdim = ref.shape[1]
-    corner = [int(np.argmin(np.abs(ref - e).sum(axis=1))) for e in np.vstack([np.zeros(pdim), np.eye(pdim)])]
-    edges = np.stack([x[:, :, corner[d + 1]] - x[:, :, corner[0]] for d in range(pdim)], axis=-1)
+    centre = np.full(pdim, 0.5)
+    ends = [[int(np.argmin(np.abs(ref - np.where(np.arange(pdim) == d, side, centre)).sum(axis=1))) for side in (0.0, 1.0)]
+            for d in range(pdim)]
+    edges = np.stack([x[:, :, hi] - x[:, :, lo] for lo, hi in ends], axis=-1)
     det = np.linalg.det(edges.transpose(1, 0, 2))
     out = x.copy()
     out[:, det < 0] = x[:, det < 0][:, :, mirror_permutation(ref)]
-    return out
+    return out, det < 0

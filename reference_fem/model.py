@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import CellBasis, ElementHex2, ElementQuad2, ElementVector, FacetBasis, asm
+from skfem import ElementHex2, ElementQuad2, ElementVector, asm
 
 from cases.params import UnsupportedCase
 from cases.geometry import PRISM, RING
 
-from . import forms, laws, regions, swept
+from . import forms, laws, regions, swept, ties
 from .frames import AXISYMMETRIC, SOLID, body_coordinates, body_rotation, in_intervals, section_of, x3_of
 from .mass import consistent_mass, lumped_mass, redistributed_mass
 from .mesh import RefMesh, build_mesh
@@ -61,10 +61,12 @@ class Model:
         self.dim = mesh.dim()
         scalar = ElementQuad2() if self.dim == 2 else ElementHex2()
         self.element = ElementVector(scalar)
-        self.basis = CellBasis(mesh, self.element, intorder=INTORDER)
+        self.basis = ties.cell_basis(mesh, self.element, intorder=INTORDER)
         axisym = self.rep == AXISYMMETRIC
         self.B, self.weights = forms.strain_operator(self.basis, axisym)
         self.x_qp = np.asarray(self.basis.global_coordinates()).reshape(self.dim, -1)
+        #: ``(dim, n_nodes)``: the nodes of the unknowns (a node tied on the axis once, :mod:`.ties`)
+        self.nodes_x = ties.node_positions(mesh)
         #: B-bar's volumetric projection per element, or None (:func:`~reference_fem.forms.volumetric_projection`)
         self.projection = forms.volumetric_projection(self.weights, self.x_qp, self.basis.dx.shape[1]) if bbar else None
         if bbar:
@@ -175,7 +177,7 @@ class Model:
         Q = np.zeros(self.basis.N)
         for load in [x for x in self.case.loads if not x.timed] if loads is None else loads:
             facets = self.load_facets(load)
-            fb = FacetBasis(self.rmesh.mesh, self.element, facets=facets, intorder=INTORDER)
+            fb = ties.facet_basis(self.rmesh.mesh, self.element, facets=facets, intorder=INTORDER)
             x = np.asarray(fb.global_coordinates())
             weight = x[0] if self.rep == AXISYMMETRIC else np.ones_like(x[0])
             Q += asm(forms.pressure, fb, q=load.q, weight=weight)
@@ -204,7 +206,7 @@ class Model:
         from cases.histories import time_factor
         from cases.manufactured import numeric
 
-        basis = self.basis if term.edge is None else FacetBasis(
+        basis = self.basis if term.edge is None else ties.facet_basis(
             self.rmesh.mesh, self.element, facets=self.edge_facets(term.edge), intorder=INTORDER)
         points = np.asarray(basis.global_coordinates())  # (dim, n, n_qp)
         shape, x_qp = points.shape[1:], points.reshape(self.dim, -1)
@@ -298,7 +300,7 @@ class Model:
         R = None
         for iv in self.case.initial_velocity:
             if R is None:
-                R = body_rotation(self.case, self.rep, self.rmesh.mesh.doflocs)  # mesh frame -> body, per node
+                R = body_rotation(self.case, self.rep, self.nodes_x)  # mesh frame -> body, per node
             nodes = slice(None) if iv.region is None else self.region_nodes(iv.region, "an initial velocity")
             v[nodes] += iv.value * R[nodes, iv.component - 1, : self.dim]
         v = v.ravel()

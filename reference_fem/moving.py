@@ -22,11 +22,11 @@ import math
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import FacetBasis
 
 from cases.geometry import RING
 from cases.params import UnsupportedCase
 
+from . import ties
 from .frames import AXISYMMETRIC, x3_of
 
 #: Gauss points across a facet (exact for the quadratic facets' integrands)
@@ -52,7 +52,7 @@ class MovingPressure:
         self.dofs, self.antiderivative = self._tables()
 
     def _basis(self, facets, quadrature) -> FacetBasis:
-        return FacetBasis(self.model.rmesh.mesh, self.model.element, facets=facets, quadrature=quadrature)
+        return ties.facet_basis(self.model.rmesh.mesh, self.model.element, facets=facets, quadrature=quadrature)
 
     def _x3_along_facets(self):
         """Per facet: x3 at its reference origin, its change along the reference coordinate it

@@ -70,7 +70,7 @@ def match(model, pair) -> Matched:
     (off the face's normal by less than :data:`ACROSS` of the other face's node spacing, the
     nearest along it, one each), or :class:`UnsupportedCase` in one line where the two faces are
     not node for node."""
-    x = model.rmesh.mesh.doflocs
+    x = model.nodes_x
     face = face_of(model, pair.face)
     normals = np.where(np.abs(face.normals) > 1e-12, face.normals, 0.0)  # round-off of a plane's normal
     normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
@@ -127,8 +127,7 @@ def held_by_supports(model) -> None:
     by contact alone has no static state here). The rigid motions of a piece of the mesh are
     the translations and rotations its representation has (axisymmetric: the axial translation
     only); they are held where the supported dofs leave none of them free."""
-    mesh, dim = model.rmesh.mesh, model.dim
-    x = mesh.doflocs
+    dim, x = model.dim, model.nodes_x
     if model.rep == AXISYMMETRIC:
         modes = [np.array([0.0, 1.0])[:, None] * np.ones_like(x[0])]
     else:

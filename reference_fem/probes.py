@@ -75,7 +75,7 @@ class Probes:
         x = body_point_to_mesh(case, model.rep, probe.point)
         R = body_rotation(case, model.rep, x[:, None])[0]
         if fld == "u":
-            P = model.basis.probes(x[:, None]).tocsr()  # component-major rows
+            P = value_probes(model.basis, x)  # component-major rows
             row = R[probe.component[0] - 1, : model.dim]
             return lambda u, v, a, s: row @ (P @ u)
         q = int(np.argmin(np.linalg.norm(model.x_qp - x[:, None], axis=0)))
@@ -98,12 +98,27 @@ class Probes:
         return lambda u, v, a, s: (k_row @ u + m_row @ a)[0] - q
 
 
+def value_probes(basis, x: np.ndarray) -> sp.csr_matrix:
+    """The rows ``(dim, n_dof)`` that read a vector field of ``basis`` at the point ``x`` (dim,),
+    component by component: ``basis.probes`` from the shape functions' values alone. scikit-fem's
+    evaluates their gradients too, which need the map's inverse Jacobian: at a point on the axis
+    of a section swept round it (:mod:`reference_fem.ties`) that Jacobian is singular, and the
+    value is read all the same."""
+    cell = int(basis.mesh.element_finder(mapping=basis.mapping)(*x[:, None])[0])
+    local = basis.mapping.invF(x[:, None, None], tind=np.array([cell]))[:, 0, :]  # (dim, 1)
+    dim = basis.elem.dim
+    phi = np.array([basis.elem.elem.lbasis(local, i)[0][0] for i in range(basis.Nbfun // dim)])  # scalar functions
+    rows = np.tile(np.arange(dim), basis.Nbfun // dim)  # local dof l: function l // dim, component l % dim
+    values = np.repeat(phi, dim)
+    return sp.csr_matrix((values, (rows, basis.element_dofs[:, cell])), shape=(dim, basis.N))
+
+
 def body_mean_row(model, component: int, region: str | None = None) -> np.ndarray:
     """The row ``w`` with ``w @ x`` the mass-weighted mean of body ``component`` (1-based) of the
     full dof vector ``x``: ``e^T M x / m``, ``e`` the component's direction at every node (of
     ``region``'s nodes only, when given: a body sharing no node with the rest, whose mass rows
     are its own, :meth:`reference_fem.model.Model.region_nodes`)."""
-    R = body_rotation(model.case, model.rep, model.rmesh.mesh.doflocs)
+    R = body_rotation(model.case, model.rep, model.nodes_x)
     e = R[:, component - 1, : model.dim]
     nodes = slice(None)
     if region is not None:

@@ -174,7 +174,7 @@ def output_mesh(model: Model, u_full: np.ndarray, system, v_full: np.ndarray) ->
     to_frame = mesh_frame_to_cartesian(case, rep)
     vectors = {}
     for name, values in (("displacement", u_full), ("velocity", v_full)):
-        x = np.zeros((3, mesh.p.shape[1]))
+        x = np.zeros((3, model.nodes_x.shape[1]))
         x[: model.dim] = model.nodal_displacement(values)
         vectors[name] = (to_frame @ x).T
     cell_type, cells = vtk_cells(mesh)
@@ -185,7 +185,8 @@ def output_mesh(model: Model, u_full: np.ndarray, system, v_full: np.ndarray) ->
         cell_data["peps"] = [system.peps.reshape(mesh.nelements, -1).mean(axis=1)]
     cell_data["solid"] = [np.ones(mesh.nelements, np.uint8)]  # as SMFEM's field: the cut-outs are not meshed here
     cell_data["region"] = [model.material_index.astype(np.int32)]  # index into case.materials
-    return meshio.Mesh(to_cartesian(case, rep, mesh.p).T, {cell_type: cells}, point_data=vectors, cell_data=cell_data)
+    return meshio.Mesh(to_cartesian(case, rep, model.nodes_x).T, {cell_type: cells}, point_data=vectors,
+                       cell_data=cell_data)
 
 
 def _info(model: Model, system, cpu_mesh: float) -> dict:

@@ -41,15 +41,8 @@ def section_elements(case):
 
 def check_sweepable(case, rep: str, section) -> None:
     """Refuse the representations a mesh section has no form in, in one line."""
-    if rep == AXISYMMETRIC:
-        return
-    if rep != SOLID:
+    if rep not in (AXISYMMETRIC, SOLID):
         plane_strain_row(case, section)
-        return
-    if case.body == RING and np.abs(section.x[:, 0]).min() <= 1e-9 * np.abs(section.x).max():
-        raise UnsupportedCase(f"reference solver: {case.name}: a mesh section that touches the axis has no 3D form "
-                              "(its swept elements would collapse on the axis); use dim=2 where the case is "
-                              "axisymmetric")
 
 
 def plane_strain_row(case, section) -> np.ndarray:
@@ -117,6 +110,28 @@ def element_nodes(case, section, x3: np.ndarray | None) -> np.ndarray:
     return out.reshape(3, -1, 27)
 
 
+def axis_tags(case, section, x3: np.ndarray | None) -> np.ndarray | None:
+    """Where a ring's section reaches the axis and is swept round it (``x3``), the angle of each
+    element node on the axis as a tag, ``(n_elements, 27)`` (0 off the axis, else 1 + the index
+    of its angle among the half-steps of ``x3``, the full circle's last angle its first): the
+    mesh keeps the nodes at one axis point apart by angle and ties them as one unknown
+    (:mod:`reference_fem.ties`). None where nothing is on the axis."""
+    if x3 is None or case.body != RING:
+        return None
+    ref = ElementHex2.doflocs
+    N = shape(2 * ref[:, 0] - 1, 2 * ref[:, 1] - 1)[0]  # (27, 9)
+    r = np.einsum("pn,en->ep", N, section.x[section.elements][:, :, 0])  # (n_el, 27)
+    on_axis = np.abs(r) <= 1e-9 * np.abs(section.x).max()
+    if not on_axis.any():
+        return None
+    half_steps = 2 * (len(x3) - 1)
+    index = 2 * np.arange(len(x3) - 1)[:, None] + np.round(2 * ref[None, :, 2]).astype(np.int64)  # (n_x3, 27)
+    if np.isclose(x3[-1] - x3[0], 2 * np.pi):
+        index = index % half_steps
+    tags = np.where(on_axis[None], 1 + index[:, None, :], 0)  # (n_x3, n_el, 27)
+    return tags.reshape(-1, 27)
+
+
 def element_parents(section, x3: np.ndarray | None) -> np.ndarray:
     """The section element each element of :func:`element_nodes` is made from, ``(n_elements,)``."""
     return np.tile(np.arange(len(section.elements)), 1 if x3 is None else len(x3) - 1)
@@ -151,7 +166,10 @@ def edge_facets(case, rep: str, mesh, section, facets: np.ndarray, edge: str,
     x1, x2 = (np.hypot(xc[0], xc[1]), xc[2]) if case.body == RING else (xc[1], xc[2])
     points = key(np.column_stack([x1, x2]))
     n = corners.shape[2]
-    on = [frozenset(points[i * n:(i + 1) * n]) in ends for i in range(len(facets))]
+    # a facet on the axis of a ring swept round it is a line (:mod:`reference_fem.ties`): on no edge
+    line = np.all(np.abs(x1.reshape(-1, n)) <= scale, axis=1) if case.body == RING and rep == SOLID else \
+        np.zeros(len(facets), bool)
+    on = [frozenset(points[i * n:(i + 1) * n]) in ends and not line[i] for i in range(len(facets))]
     if parent is not None:
         element = mesh.f2t[0, facets]  # a boundary facet's one element
         on = [hit and ends[frozenset(points[i * n:(i + 1) * n])] == parent[element[i]] for i, hit in enumerate(on)]

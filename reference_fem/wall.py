@@ -62,7 +62,7 @@ def case_wall_rows(model) -> WallRows:
 def initial_gaps(model, face, nodes: np.ndarray) -> np.ndarray:
     """The wall's initial gap at mesh ``nodes`` (a tilted wall's grows away from its first-struck
     rim point: :class:`cases.geometry.Wall`); the wall's ``face`` gives the rim's position."""
-    x = model.rmesh.mesh.doflocs[0]  # first Cartesian coordinate (3D) or radius (axisymmetric)
+    x = model.nodes_x[0]  # first Cartesian coordinate (3D) or radius (axisymmetric)
     return model.case.wall.gap_at(x[nodes], x[face.nodes].max())
 
 
@@ -92,7 +92,7 @@ class ContactLog:
     def gap(self) -> np.ndarray:
         """The wall's initial gap at every node."""
         model = self.system.model
-        return initial_gaps(model, self.face, np.arange(model.rmesh.mesh.doflocs.shape[1]))
+        return initial_gaps(model, self.face, np.arange(model.nodes_x.shape[1]))
 
     def record(self, t: float, u: np.ndarray, v: np.ndarray, u_full: np.ndarray) -> None:
         """Log the state ``u``, ``v`` (free dofs; ``u_full`` all dofs) at time ``t``."""
@@ -107,7 +107,7 @@ class ContactLog:
     def clearance(self, u_full: np.ndarray) -> float:
         """Smallest distance of any mesh node to the wall (m), negative when it penetrates."""
         model = self.system.model
-        x = model.rmesh.mesh.doflocs + model.nodal_displacement(u_full)
+        x = model.nodes_x + model.nodal_displacement(u_full)
         return float((self.face.offset + self.gap - self.face.normal @ x).min())
 
     def energy(self, u: np.ndarray, v: np.ndarray) -> float:

@@ -71,11 +71,6 @@ def test_theta_elements_sets_the_3d_circumference_of_a_mesh_section_and_of_a_blo
 
 
 def test_what_the_reference_cannot_mesh_is_refused_in_one_line(tmp_path):
-    rod = get_case("rod_impact", {"dim": 3, "wall_slope": 0.01, "harmonics": 2})
-    mesh_rod = dataclasses.replace(rod, section=read_msh(SECTIONS / "rod_impact.msh"))
-    with pytest.raises(UnsupportedCase, match="touches the axis") as err:
-        solve("reference-3d", mesh_rod)
-    assert "\n" not in str(err.value)
     with pytest.raises(UnsupportedCase, match="cannot be coarsened"):
         solve("reference-2d", dataclasses.replace(ring_case(tmp_path, 2), params={**ring_case(tmp_path, 2).params,
                                                                                  "coarsen": 2}))

@@ -22,6 +22,7 @@ import numpy as np
 from cases.material import ELASTIC, VON_MISES
 from cases.params import UnsupportedCase
 
+from .. import ties
 from ..face import plane_face
 from ..frames import AXISYMMETRIC, SOLID, body_point_to_mesh
 from ..mesh import vtk_cells
@@ -116,7 +117,7 @@ def build_deck(case, every: int = 1) -> Deck:
     n_corner = CORNERS[dim]
     element = "C3D20" if rep == SOLID else ("CAX8" if rep == AXISYMMETRIC else "CPE8")
     used = np.unique(cells[:, :n_corner])
-    points = np.asarray(mesh.p, float)
+    points = np.asarray(model.nodes_x, float)
     points = np.where(np.abs(points) < 1e-12 * np.abs(points).max(), 0.0, points)  # see _number
     out = [
         f"** {case.title}",
@@ -303,7 +304,7 @@ def _element_faces(model: Model, cells: np.ndarray, facets: np.ndarray, dim: int
     out = []
     for f in facets:
         e = int(mesh.f2t[0, f])
-        corners = set(mesh.facets[:, f].tolist())
+        corners = set(ties.of(mesh, mesh.facets[:, f]).tolist())  # as the cells name them
         for k, face in enumerate(FACES[dim]):
             if {int(cells[e, i]) for i in face} == corners:
                 out.append((e, k + 1))
