@@ -46,17 +46,7 @@ def geometry(gmsh, size: float) -> tuple[dict, dict]:
         ("free", (hub_out, hub_h), None), ("free", (hub_in, hub_h), None),
         ("bore", (hub_in, -hub_h), None),
     ]
-    points = [occ.addPoint(x, y, 0.0, size) for _, (x, y), _ in pieces]
-    named, loop, centres = {name: [] for name in CURVES}, [], []
-    for (name, _, centre), a, b in zip(pieces, points[-1:] + points[:-1], points):
-        if centre is None:
-            loop.append(occ.addLine(a, b))
-        else:
-            centres.append(occ.addPoint(*centre, 0.0))
-            loop.append(occ.addCircleArc(a, centres[-1], b))
-        named[name].append(loop[-1])
-    steel = occ.addPlaneSurface([occ.addCurveLoop(loop)])
-    occ.remove([(0, c) for c in centres])  # the arcs' centres are not part of the section
+    named, steel = meshing.outline(gmsh, pieces, CURVES, size)
     refine_near(gmsh, named["fillets"], size)
     return named, {"steel": [steel]}
 

@@ -75,6 +75,26 @@ def main(name: str, geometry: Callable, size: float, argv: list[str] | None = No
     return 0
 
 
+def outline(gmsh, pieces, names, size: float) -> tuple[dict, int]:
+    """A section bounded by one loop of straight lines and circular arcs: ``pieces`` is a list of
+    ``(curve name, end point, centre of the arc or None for a straight piece)``, each from the
+    end of the one before, the last closing the loop at the first's start. Returns the curve
+    tags by name (``names``, in their order) and the plane surface's tag."""
+    occ = gmsh.model.occ
+    points = [occ.addPoint(x, y, 0.0, size) for _, (x, y), _ in pieces]
+    named, loop, centres = {name: [] for name in names}, [], []
+    for (name, _, centre), a, b in zip(pieces, points[-1:] + points[:-1], points):
+        if centre is None:
+            loop.append(occ.addLine(a, b))
+        else:
+            centres.append(occ.addPoint(*centre, 0.0))
+            loop.append(occ.addCircleArc(a, centres[-1], b))
+        named[name].append(loop[-1])
+    surface = occ.addPlaneSurface([occ.addCurveLoop(loop)])
+    occ.remove([(0, c) for c in centres])  # the arcs' centres are not part of the section
+    return named, surface
+
+
 def positive(text: str) -> float:
     """``--size``'s value: a finite number > 0."""
     value = float(text)
