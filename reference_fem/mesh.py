@@ -61,6 +61,7 @@ INVF_TOL = 1e-10
 #: elements tried for a point (nearest centres first) by :meth:`MeshHex2Tied.element_finder`, and
 #: how far from the point (relative to the mesh's size) an element's nearest image may be
 FINDER_CANDIDATES = 32
+FINDER_FIRST = 4
 INSIDE_TOL = 1e-8
 
 
@@ -160,18 +161,25 @@ class MeshHex2Tied(MeshHex2Curved):
         candidates = min(FINDER_CANDIDATES, self.nelements)
         size = np.abs(self.doflocs).max()
 
+        def holder(point, near) -> int | None:
+            """The first of the elements ``near`` that holds ``point``, or None."""
+            at = point[:, None, None] + np.zeros((1, len(near), 1))
+            miss = np.linalg.norm(mapping.F(mapping.invF(at, tind=near), tind=near)[:, :, 0] - point[:, None], axis=0)
+            return int(near[np.argmin(miss)]) if miss.min() <= INSIDE_TOL * size else None
+
         def finder(x, y, z, _search_all=False):
             points = np.array([x, y, z], float).reshape(3, -1)
             found = np.empty(points.shape[1], np.int64)
             for k, point in enumerate(points.T):
-                near = np.arange(self.nelements) if _search_all else tree.query(point, candidates)[1]
-                at = point[:, None, None] + np.zeros((1, len(near), 1))
-                miss = np.linalg.norm(mapping.F(mapping.invF(at, tind=near), tind=near)[:, :, 0] - point[:, None], axis=0)
-                if miss.min() > INSIDE_TOL * size:
-                    if _search_all:
-                        raise ValueError("Point is outside of the mesh.")
-                    return finder(x, y, z, _search_all=True)
-                found[k] = near[np.argmin(miss)]
+                near = tree.query(point, candidates)[1]
+                # the nearest few first: the point is almost always in one of them
+                hit = holder(point, near[:FINDER_FIRST]) if FINDER_FIRST < len(near) else None
+                hit = hit if hit is not None else holder(point, near)
+                if hit is None and not _search_all:
+                    hit = holder(point, np.arange(self.nelements))
+                if hit is None:
+                    raise ValueError("Point is outside of the mesh.")
+                found[k] = hit
             return found
 
         return finder
