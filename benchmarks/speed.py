@@ -18,7 +18,8 @@ from cases import get_case
 from smfem.contact import ContactSystem
 from smfem.iterative import BlockIterative
 from smfem.options import SolverOptions
-from smfem.solver import build_system, solve
+from smfem.solver import solve
+from smfem.strategy import build_system
 
 RUNS = (("notched_strip", {"harmonics": 80}), ("notched_strip", {}), ("notched_strip", {"harmonics": 400}),
         ("notched_cylinder", {"harmonics": 40, "refine": 2}), ("thick_cylinder", {"plastic": True}),
@@ -33,7 +34,7 @@ def bare_solve_time(case, iterations: np.ndarray) -> float:
     if isinstance(system, ContactSystem):
         factors, count = system.lus, len(iterations)
     elif isinstance(system, BlockIterative):
-        factors, count = system.lus, int(iterations.sum())
+        factors, count = system.iteration.factors, int(iterations.sum())
     else:
         factors, count = [system.lu], len(iterations)
     rng = np.random.default_rng(0)

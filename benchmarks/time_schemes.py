@@ -54,7 +54,7 @@ from smfem.runs.errors import history_errors
 from smfem.runs.registry import SMFEM, solve
 from smfem.model import Model
 from smfem.probes import ProbeSet
-from smfem.solver import stacked
+from smfem.stacking import stacked
 from smfem.studies import metrics
 from smfem.studies.plan import quick, select
 from smfem.studies.stored import directory, read

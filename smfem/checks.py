@@ -15,7 +15,8 @@ from .model import Model
 from .newmark import LinearSystem, State, march
 from .options import SolverOptions
 from .probes import CaseProbes, ProbeSet
-from .solver import build_system, stacked
+from .stacking import stacked
+from .strategy import build_system
 
 #: the time step of a static contact solve, times the case's: inertia far below the stiffness
 STATIC_DT_FACTOR = 1e6

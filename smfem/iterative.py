@@ -7,13 +7,13 @@ iteration solves the elastic system with the residual of the current iterate,
 the harmonic coupling of the cut-outs included (:class:`smfem.coupling.StackedOperator`);
 the plastic strains live at the sample points (:mod:`smfem.sampling`), where the trial
 stresses of the step's displacement increment go through the material's law (:mod:`smfem.laws`;
-von Mises: returned to the yield surface by Wilkins' correction (16)). ``A``, the iteration matrix, is the whole coupled ``K + a0 M`` factorized
-once (:func:`factorize_coupled`; exact for an elastic step: one iteration and a check), the
-same system solved by conjugate gradients with the coupling applied matrix-free and the
-diagonal blocks as preconditioner (to a relative residual of 1e-3: the outer iterations do
-the rest), or the paper's block SOR over the harmonics, where within a sweep the stresses
-follow each block's update elastically (15). Anderson
-acceleration (Walker & Ni 2011) combines the last iterates. A step has converged when the
+von Mises: returned to the yield surface by Wilkins' correction (16)). ``A``, the iteration
+matrix, is one of three: the whole coupled ``K + a0 M`` solved directly (:class:`Factorized`, a
+form of :mod:`smfem.coupled_solve`; exact for an elastic step: one iteration and a check), the
+same system by conjugate gradients with the diagonal blocks as preconditioner
+(:class:`ConjugateGradients`, to a relative residual of 1e-3: the outer iterations do the
+rest), or the paper's block SOR over the harmonics (:class:`BlockSOR`), where within a sweep
+the stresses follow each block's update elastically (15). Anderson acceleration (Walker & Ni 2011) combines the last iterates. A step has converged when the
 correction of an iteration, ``A^-1`` times the residual, is below ``tol`` relative to the
 amplitudes; the material state is committed only then.
 
@@ -24,14 +24,14 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as sla
 
 from cases import x3_points
 
-from . import laws, woodbury
+from . import laws
 from .coupling import StackedOperator
 from .linalg import factorize_spd
 from .newmark import Constants, Load, MassSolve, StepFailed
@@ -44,16 +44,75 @@ from .sampling import SamplePoints
 KRYLOV_RTOL, KRYLOV_MAX = 1e-3, 500
 
 
-def factorize_coupled(model, a0: float):
-    """A factorization of the stacked ``K + a0 M`` of all modes: block-diagonal where the
-    harmonics do not couple; with short cut-outs the Woodbury form where its rank is the
-    smaller (:mod:`smfem.woodbury`); else the assembled coupled matrix."""
-    blocks = sp.block_diag([s.K + sp.diags(a0 * s.M) for s in model.systems], format="csr")
-    if not model.coupling:
-        return factorize_spd(blocks)
-    if woodbury.preferred(model):
-        return woodbury.CutoutWoodbury(model, a0)
-    return factorize_spd(blocks + model.coupled_stiffness() + a0 * model.coupled_mass)
+@dataclass(frozen=True)
+class Step:
+    """The step being solved: its load ``Q``, the predicted displacement and what applies
+    ``K`` and ``M``; the iterations add the plastic loads."""
+
+    Q: np.ndarray
+    predicted: np.ndarray
+    op: StackedOperator
+    a0: float
+
+    @cached_property
+    def rhs(self) -> np.ndarray:
+        """``Q + a0 M predicted``: the right-hand side but the plastic loads."""
+        return self.Q + self.a0 * self.op.M(self.predicted)
+
+    def residual(self, x: np.ndarray, loads: np.ndarray) -> np.ndarray:
+        return self.Q + loads - self.op.K(x) - self.a0 * self.op.M(x - self.predicted)
+
+
+class Factorized:
+    """The iteration matrix ``A = K + a0 M`` itself, solved directly (a form of
+    :mod:`smfem.coupled_solve`): ``x + A^-1 (b - A x) = A^-1 b`` without ``K x``, and exact."""
+
+    exact = True
+
+    def __init__(self, solver):
+        self.solver, self.factorizations = solver, 1
+        self.factors = [solver]  # what one iteration solves with
+
+    def correction(self, x: np.ndarray, step: Step, loads: np.ndarray) -> np.ndarray:
+        return self.solver.solve(step.rhs + loads) - x
+
+
+class ConjugateGradients:
+    """``A`` by conjugate gradients (:class:`smfem.coupled_solve.Krylov`), each correction to
+    :data:`KRYLOV_RTOL` from zero."""
+
+    exact = False
+
+    def __init__(self, krylov):
+        self.krylov, self.factorizations = krylov, len(krylov.lus)
+        self.factors = krylov.lus  # one solve each per Krylov iteration
+
+    def correction(self, x: np.ndarray, step: Step, loads: np.ndarray) -> np.ndarray:
+        return self.krylov.solve(step.residual(x, loads), start=np.zeros_like(x))
+
+
+class BlockSOR:
+    """The paper's block SOR over the harmonics: one sweep, each block's update followed
+    elastically by the next (15); exact where the blocks do not couple and ``omega`` is 1."""
+
+    def __init__(self, model, a0: float, omega: float):
+        S, o = model.systems, model.offsets
+        self.omega, self.offsets = omega, o
+        self.lus = [factorize_spd(s.K + sp.diags(a0 * s.M)) for s in S]
+        K = sp.block_diag([s.K for s in S], format="csr") + (model.coupled_stiffness() if model.coupling else 0)
+        M = model.mass_matrix()
+        M = sp.csr_matrix(sp.diags(M) if isinstance(M, np.ndarray) else M)
+        self.rows = [(sp.csr_matrix(K[o[i]:o[i + 1]]), sp.csr_matrix(a0 * M[o[i]:o[i + 1]])) for i in range(len(S))]
+        self.exact = not model.coupling and omega == 1.0
+        self.factors = self.lus  # one solve each per sweep
+        self.factorizations = len(self.lus)
+
+    def correction(self, x: np.ndarray, step: Step, loads: np.ndarray) -> np.ndarray:
+        o, new = self.offsets, x.copy()
+        for i, (lu, (K, a0M)) in enumerate(zip(self.lus, self.rows)):
+            r = step.Q[o[i]:o[i + 1]] + loads[o[i]:o[i + 1]] - K @ new - a0M @ (new - step.predicted)
+            new[o[i]:o[i + 1]] += self.omega * lu.solve(r)
+        return new - x
 
 
 class NotConverged(StepFailed):
@@ -98,49 +157,28 @@ class BlockIterative:
 
     Parameters
     ----------
-    model : a :class:`smfem.model.Model` built with ``nonlinear=True``
+    model : a :class:`smfem.model.Model`
     dt : time step, s
-    options : the iteration matrix (``'coupled'``, ``'matrix-free'`` or ``'sor'``: not ``'auto'``,
-        which :func:`smfem.solver.build_system` resolves), Anderson memory, relaxation,
-        tolerance, iteration limit and sample points along x3
+    options : Anderson memory, tolerance, iteration limit and sample points along x3
+    iteration : the iteration matrix (:class:`Factorized`, :class:`ConjugateGradients` or
+        :class:`BlockSOR`, built for ``dt``; :mod:`smfem.strategy` chooses it)
+    op : ``K`` and ``M`` of the modes stacked, applied
+    terms : the timed loads (:class:`smfem.newmark.Load`)
     """
 
-    def __init__(self, model, dt: float, options: SolverOptions, terms=()):
-        self.model, self.omega = model, options.relaxation
-        self.kind = options.iteration_matrix
-        self.memory = options.anderson if self.kind != "sor" else 0
+    def __init__(self, model, dt: float, options: SolverOptions, iteration, op: StackedOperator, terms=()):
+        self.model, self.iteration, self.op = model, iteration, op
+        self.memory = options.anderson if not isinstance(iteration, BlockSOR) else 0
         self.tol, self.max_iter = model.case.params["tol"], options.max_iterations
-        self.c = c = Constants.of(dt)
-        self.op = StackedOperator(model)
+        self.c = Constants.of(dt)
         self.x3_rule = (options.x3_oversampling, "set") if options.x3_oversampling is not None else \
             x3_points.oversampling(model.case.name, model.case.params.get("harmonics", 0))
         self.points = SamplePoints(model, self.x3_rule[0], options.x3_min_points)
-        S = model.systems
         self.offsets = model.offsets
-        self.Q = np.concatenate([s.Q for s in S])
+        self.Q = np.concatenate([s.Q for s in model.systems])
         #: the load history (the force terms' time functions over the held pressures)
         self.load = Load(self.Q, terms)
-        self.Q_now = self.Q  # the load of the step being solved
-        if self.kind == "coupled":
-            self.lus = [factorize_coupled(model, c.a0)]
-        else:  # 'matrix-free' and 'sor': one factorization per diagonal block
-            self.lus = [factorize_spd(s.K + sp.diags(c.a0 * s.M)) for s in S]
-        if self.kind == "matrix-free":
-            n, o = len(self.Q), self.offsets
-            self.A = sla.LinearOperator((n, n), matvec=lambda v: self.op.K(v) + c.a0 * self.op.M(v), dtype=float)
-            self.blocks = sla.LinearOperator((n, n), dtype=float, matvec=lambda r: np.concatenate(
-                [lu.solve(r[o[i]:o[i + 1]]) for i, lu in enumerate(self.lus)]))
-            self.krylov_iterations = 0
-        if self.kind == "sor":  # the rows of each mode of the stacked matrices
-            K = sp.block_diag([s.K for s in S], format="csr") + (model.coupled_stiffness() if model.coupling else 0)
-            M = model.mass_matrix()
-            M = sp.csr_matrix(sp.diags(M) if isinstance(M, np.ndarray) else M)
-            o = self.offsets
-            self.rows = [(sp.csr_matrix(K[o[i]:o[i + 1]]), sp.csr_matrix(c.a0 * M[o[i]:o[i + 1]])) for i in range(len(S))]
-        self.factorizations = len(self.lus)
-        #: a correction solves the elastic system exactly: the coupled factorization, or a sweep of
-        #: blocks that do not couple (block Jacobi, unrelaxed)
-        self.exact_solve = self.kind == "coupled" or (self.kind == "sor" and not model.coupling and self.omega == 1.0)
+        self.factorizations = iteration.factorizations
         n_points = int(np.prod(self.points.point_shape[1:]))
         # the contrast material's stiffness is scaled with its factor
         factor = np.broadcast_to(self.points.factor[:, None, :], self.points.point_shape[1:]).ravel()
@@ -149,6 +187,8 @@ class BlockIterative:
         self.state = PointState(self.law.initial_state(n_points), np.zeros((6, n_points)))
         self.loads = np.zeros_like(self.Q)  # the committed additional loads F_p
         self.loads_before = self.loads
+        #: the converged step's point state and loads, which :meth:`commit` makes the state
+        self.pending: tuple[PointState, np.ndarray] | None = None
         self.timings = {"synthesis": 0.0, "stress": 0.0, "projection": 0.0, "solves": 0.0}
 
     @property
@@ -189,6 +229,7 @@ class BlockIterative:
     def commit(self, u: np.ndarray) -> None:
         self.loads_before = self.loads
         self.state, self.loads = self.pending
+        self.pending = None
 
     def observe(self, state) -> None:
         """Nothing to watch between steps."""
@@ -196,37 +237,15 @@ class BlockIterative:
     def report(self) -> tuple[str, dict]:
         facts = {"n_x3_points": len(self.points.x3), "x3_oversampling": self.x3_rule[0], "x3_rule": self.x3_rule[1],
                  "time_breakdown_s": dict(self.timings)}
-        if self.kind == "matrix-free":
-            facts["krylov_iterations"] = self.krylov_iterations
+        if isinstance(self.iteration, ConjugateGradients):
+            facts["krylov_iterations"] = self.iteration.krylov.iterations
         return "", facts
-
-    def residual(self, x: np.ndarray, predicted: np.ndarray, loads: np.ndarray) -> np.ndarray:
-        return self.Q_now + loads - self.op.K(x) - self.c.a0 * self.op.M(x - predicted)
-
-    def correction(self, x: np.ndarray, predicted: np.ndarray, loads: np.ndarray) -> np.ndarray:
-        """``A^-1`` times the residual at ``x`` (for ``'sor'``: one block SOR sweep's change)."""
-        if self.kind == "coupled":  # A is K + a0 M itself: x + A^-1 (b - A x) = A^-1 b, without K x
-            return self.lus[0].solve(self.rhs_step + loads) - x
-        if self.kind == "matrix-free":
-            count = []
-            dx, _ = sla.cg(self.A, self.residual(x, predicted, loads), rtol=KRYLOV_RTOL, M=self.blocks,
-                           maxiter=KRYLOV_MAX, callback=count.append)
-            self.krylov_iterations += len(count)
-            return dx
-        o = self.offsets
-        new = x.copy()
-        for i, (lu, (K, a0M)) in enumerate(zip(self.lus, self.rows)):
-            r = self.Q_now[o[i]:o[i + 1]] + loads[o[i]:o[i + 1]] - K @ new - a0M @ (new - predicted)
-            new[o[i]:o[i + 1]] += self.omega * lu.solve(r)  # (15): the stresses follow elastically
-        return new - x
 
     def solve(self, predicted: np.ndarray, u: np.ndarray, step_index: int, t: float) -> tuple[np.ndarray, int]:
         """One time step's iterations from the last step's ``u``; the new amplitudes and the
         number of iterations (the material state waits for :meth:`commit`)."""
         tick, pts, state = time.perf_counter, self.points, self.state
-        self.Q_now = self.load(t)
-        if self.kind == "coupled":  # the step's loads but the plastic ones
-            self.rhs_step = self.Q_now + self.c.a0 * self.op.M(predicted)
+        step = Step(self.load(t), predicted, self.op, self.c.a0)
         anderson = Anderson(self.memory) if self.memory else None
         # the plastic loads extrapolated from the last two steps: a closer start (strip: 5.8 -> 5.0
         # iterations per step); the iterations recompute them from the state, so only the start moves
@@ -234,7 +253,7 @@ class BlockIterative:
         loads = start = 2 * self.loads - self.loads_before
         for iteration in range(1, self.max_iter + 1):
             t0 = tick()
-            dx = self.correction(x, predicted, loads)
+            dx = self.iteration.correction(x, step, loads)
             x = x + dx if anderson is None else anderson.next(x, dx)
             t1 = tick()
             trial = state.law.sigma + pts.stress(x - u).reshape(6, -1)
@@ -255,10 +274,10 @@ class BlockIterative:
             if not (np.isfinite(change2) and np.isfinite(size2)):
                 raise NotConverged(f"step {step_index} (t = {t:.6g} s) diverged at iteration {iteration}: "
                                    f"the amplitudes are no longer finite")
-            # an exact solve (:attr:`exact_solve`; no Anderson mixing yet) with the loads
+            # an exact solve (the iteration matrix's ``exact``; no Anderson mixing yet) with the loads
             # that the state now gives back is the step's exact solution: no second iteration
             # to confirm it (every elastic step: the thick cylinder's first 35 of 100)
-            exact = self.exact_solve and iteration == 1 and np.array_equal(loads, start)
+            exact = self.iteration.exact and iteration == 1 and np.array_equal(loads, start)
             if exact or change2 <= self.tol**2 * max(size2, 1e-300):
                 self.pending = (PointState(law_state, relaxed), loads)
                 return x, iteration

@@ -106,14 +106,22 @@ class Model:
             raise ModelError(f"{case.name}: no load and no initial velocity: nothing moves")
         loaded = [i for i, m in enumerate(candidates) if size[m] > 1e-12 * scale]
         self.nonlinear = nonlinear
+        #: the x3 quadrature of the material's variation, its factor f per element and point, and
+        #: the elements where f is not 1 (the only ones that couple harmonics): none where the
+        #: body is homogeneous along x3 and the run is linear
+        self.x3, self.x3_weights = np.zeros(0), np.zeros(0)
+        self.factor = np.ones((self.mesh.n_elements, 0))
         if self.inhomogeneous or nonlinear:
             self.x3, self.x3_weights = inhomogeneity.x3_quadrature(case, n_harm)
             self.factor = inhomogeneity.element_factor(case, self.mesh, self.x3)
-            #: the elements whose material varies along x3: the only ones that couple harmonics
-            self.cutout_elements = np.flatnonzero((self.factor != 1.0).any(axis=1))
-        if nonlinear:
-            allowed = set(symmetry.nonlinear_modes(case, candidates))
-            active = [i for i, m in enumerate(candidates) if m in allowed]
+        self.cutout_elements = np.flatnonzero((self.factor != 1.0).any(axis=1))
+        active = [i for i, m in enumerate(candidates) if m in set(symmetry.nonlinear_modes(case, candidates))] \
+            if nonlinear else loaded
+        #: the coupling integrals (n_active, n_active, n_profiles, 2, 2) over the elements' few
+        #: profiles f(x3) and each element's profile; None where no material varies along x3
+        self._I, self._profile = None, None
+        #: the pairs of different modes the material couples
+        self.coupling: list[tuple[int, int]] = []
         if self.inhomogeneous:
             # elements share a few profiles f(x3) (1 outside the cut-outs): integrate each once
             profiles, self._profile = np.unique(self.factor, axis=0, return_inverse=True)
@@ -129,15 +137,10 @@ class Model:
                 strength = np.maximum(np.abs(I[..., 0, 0]), np.abs(I[..., 1, 1])).max(axis=2)
                 kept = self._reachable(loaded, strength)
                 active, I = kept, I[np.ix_(kept, kept)]
-            self._I = I  # (n_active, n_active, n_profiles, 2, 2)
+            self._I = I
             linked = np.abs(I).reshape(len(active), len(active), -1).max(axis=2) > 0
             np.fill_diagonal(linked, False)
-            #: the pairs of different modes the material couples
-            self.coupling: list[tuple[int, int]] = [tuple(map(int, p)) for p in np.argwhere(linked)]
-        else:
-            active = active if nonlinear else loaded
-            self._I = None
-            self.coupling = []
+            self.coupling = [tuple(map(int, p)) for p in np.argwhere(linked)]
         self.modes = [candidates[a] for a in active]
         fixed = constraints.fixed_dofs(case, self.mesh)
         self.systems: list[ModeSystem] = []

@@ -11,9 +11,10 @@ step's equilibrium is solved, which a *system* does:
 * ``observe(state)``: after every state the run records (t = 0 included);
 * ``report()``: at the end, a verdict on the whole run (``''`` if none) and facts for ``info``.
 
-:class:`LinearSystem` (decoupled harmonics or the whole coupled block system, one factorization),
-:class:`smfem.iterative.BlockIterative` (plastic and inhomogeneous steps) and
-:class:`smfem.contact.ContactSystem` (the contact layer) are the three.
+:class:`LinearSystem` (assembled matrices, one factorization), :class:`CoupledLinearSystem`
+(harmonics that couple, applied without the coupled matrix and solved by a form of
+:mod:`smfem.coupled_solve`), :class:`smfem.iterative.BlockIterative` (plastic steps) and
+:class:`smfem.contact.ContactSystem` (the contact layer) are the four.
 """
 
 from __future__ import annotations
@@ -81,7 +82,7 @@ def march(system, u0: np.ndarray, v0: np.ndarray, dt: float, n_steps: int) -> It
 class Load:
     """A load history ``Q + sum Q_k(t)``: the pressures' ``Q``, held from t = 0, and the timed
     loads ``Q_k(t)`` (callables: force terms, pressures with an amplitude or moving; all modes
-    stacked, :func:`smfem.solver.force_terms`)."""
+    stacked, :func:`smfem.stacking.force_terms`)."""
 
     def __init__(self, Q: np.ndarray, terms=()):
         self.Q, self.terms = Q, tuple(terms)
@@ -165,3 +166,26 @@ class LinearSystem:
     def mass_times(self, x: np.ndarray) -> np.ndarray:
         """``M x`` (``x`` real or complex)."""
         return self.M * x if self.diagonal_mass else self.M @ x
+
+
+class CoupledLinearSystem(LinearSystem):
+    """``M a + K u = Q`` of modes that couple: ``K`` and ``M`` applied by ``op``
+    (:class:`smfem.coupling.StackedOperator`: exact, no coupled matrix), ``K + a0 M`` solved by
+    ``solver`` (:mod:`smfem.coupled_solve`, built for this ``dt``); ``M`` also as the sparse
+    coupled mass, for the acceleration at t = 0."""
+
+    def __init__(self, op, solver, mass: sp.spmatrix, Q: np.ndarray, dt: float, terms=()):
+        self.op, self.lu, self.M, self.load = op, solver, mass, Load(Q, terms)
+        self.a0, self.diagonal_mass, self.factorizations = Constants.of(dt).a0, False, 1
+
+    def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
+        return MassSolve(self.M)(self.load(0.0) - self.op.K(u0))
+
+    def solve(self, predicted: np.ndarray, u: np.ndarray, step: int, t: float) -> tuple[np.ndarray, int]:
+        return self.lu.solve(self.load(t) + self.a0 * self.op.M(predicted)), 1
+
+    def energy(self, u: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+        return 0.5 * v @ self.op.M(v), 0.5 * u @ self.op.K(u)
+
+    def mass_times(self, x: np.ndarray) -> np.ndarray:
+        return self.op.M(x)

@@ -43,17 +43,18 @@ class SolverOptions:
         ``K + a0 M`` factorized once; ``'matrix-free'``, that system solved by conjugate gradients
         with the coupling applied through the cut-outs' x3 points and the per-harmonic diagonal
         blocks, factorized, as preconditioner (memory grows linearly with the harmonics);
-        ``'sor'``, the paper's block SOR over the harmonics; ``'auto'``: ``'coupled'`` where the
-        body is homogeneous along x3 (block-diagonal, one solve) or the coupled matrix has at
-        most ``direct_max_nonzeros`` nonzeros, else ``'matrix-free'``. An elastic body with
-        cut-outs is solved directly (one factorization) under ``'auto'`` and ``'coupled'``, by
-        the iterations otherwise.
+        ``'sor'``, the paper's block SOR over the harmonics; ``'auto'``: the direct form of
+        least predicted cost that fits in memory (:mod:`smfem.coupled_solve`: block-diagonal,
+        the whole coupled matrix within ``direct_max_nonzeros``, or block-diagonal plus the
+        cut-outs' low-rank correction), else ``'matrix-free'``. An elastic body with cut-outs is
+        solved by that form (one solve per step) under ``'auto'`` and ``'coupled'``, by the
+        iterations otherwise.
     anderson : iterates an Anderson acceleration of the iterations remembers (0: the plain
         iteration, the paper's; not with ``'sor'``)
     relaxation : omega of the block SOR over the harmonics (1: Gauss-Seidel)
     max_iterations : iterations allowed per step before a run stops as not converged
     direct_max_nonzeros : the largest coupled system (nonzeros of ``K + a0 M``) factorized whole
-        under ``'auto'``
+        under ``'auto'`` (the cost decides below it)
     x3_oversampling : stress sample points along x3, in multiples of the fewest that integrate
         the kept modes exactly (:mod:`smfem.sampling`); None: the multiple measured for the scene
         and harmonic count (:mod:`cases.x3_points`: the plastic-zone area within 1 % of twice

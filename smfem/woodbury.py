@@ -45,11 +45,6 @@ def rank_bound(model) -> int:
     return len(cutout_points(model)[0]) * 2 * len(cutout_dofs(model))
 
 
-def preferred(model) -> bool:
-    """Whether the low-rank form is the cheaper: its rank at most half the coupled unknowns."""
-    return bool(model.coupling) and rank_bound(model) <= 0.5 * len(model.systems) * len(cutout_dofs(model))
-
-
 class CutoutWoodbury:
     """``solve(b)`` with the coupled elastic ``K + a0 M`` of ``model``, as described above."""
 

@@ -15,7 +15,8 @@ from smfem import assembly, bbar, element as moment, elements, fourier, quad9
 from smfem.constitutive import isotropic_D
 from smfem.model import Model
 from smfem.options import SolverOptions
-from smfem.solver import solve, stacked
+from smfem.solver import solve
+from smfem.stacking import stacked
 
 D = isotropic_D(2.1e11, 0.3)
 

@@ -8,7 +8,8 @@ from scipy.signal import argrelextrema
 from cases import get_case
 from smfem.model import Model
 from smfem.newmark import LinearSystem, march
-from smfem.solver import solve, stacked
+from smfem.solver import solve
+from smfem.stacking import stacked
 
 
 @pytest.fixture(scope="module")

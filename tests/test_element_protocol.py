@@ -12,7 +12,8 @@ from helpers import FULL4, distorted_mesh, with_element
 from smfem import assembly, elements, fourier
 from smfem.constitutive import isotropic_D
 from smfem.model import Model
-from smfem.solver import solve, stacked
+from smfem.solver import solve
+from smfem.stacking import stacked
 
 D = isotropic_D(2.1e11, 0.3)
 

@@ -91,7 +91,7 @@ def test_notched_strip_static_deflection_converges_in_harmonics():
     import scipy.sparse.linalg as sla
 
     from smfem.probes import ProbeSet
-    from smfem.solver import stacked
+    from smfem.stacking import stacked
 
     def static(H):
         case = get_case("notched_strip", {"plastic": False, "harmonics": H})
@@ -147,7 +147,7 @@ def test_the_matrix_free_operator_equals_the_assembled_coupled_matrices(name, se
     """K x and M x through the cut-outs' x3 points (smfem.coupling) against the assembled
     coupled stiffness and mass, on random amplitudes."""
     from smfem.coupling import StackedOperator
-    from smfem.solver import stacked
+    from smfem.stacking import stacked
 
     model = Model(get_case(name, sets), nonlinear=case_is_plastic(name, sets))
     K, M, _, _, _ = stacked(model)
@@ -181,11 +181,11 @@ def test_the_woodbury_form_solves_the_coupled_system():
     notch's low-rank correction (smfem.woodbury): its rank is set by the notch's x3 points, not
     by the harmonics, and its solves are those of the assembled matrix. Measured residuals:
     2e-13 at 24 harmonics, 1e-9 at 120 (the contrast 1e-6 cancels digits)."""
-    from smfem import woodbury
+    from smfem import coupled_solve, woodbury
     from smfem.coupling import StackedOperator
     from smfem.newmark import Constants
 
-    for harmonics, tol in ((24, 1e-11), (120, 1e-7)):
+    for harmonics, tol in ((120, 1e-7), (24, 1e-11)):
         case = get_case("notched_strip", {"harmonics": harmonics})
         model = Model(case, nonlinear=True)
         a0 = Constants.of(case.dt).a0
@@ -195,20 +195,40 @@ def test_the_woodbury_form_solves_the_coupled_system():
         x = W.solve(b)
         op = StackedOperator(model)
         assert np.linalg.norm(op.K(x) + a0 * op.M(x) - b) <= tol * np.linalg.norm(b)
-    assert not woodbury.preferred(model) and woodbury.preferred(Model(get_case("notched_strip", {"harmonics": 400}), nonlinear=True))
+    # by predicted cost: the whole factorization at 24 harmonics, the low-rank form at 400
+    assert coupled_solve.choose(model, 1000, 10**12)[0] == "whole"
+    assert coupled_solve.choose(Model(get_case("notched_strip", {"harmonics": 400}), nonlinear=True), 1000, 10**12)[0] == "woodbury"
 
 
 def test_a_run_with_the_woodbury_form_equals_the_sparse_factorization(monkeypatch):
-    from smfem import woodbury
+    from smfem import coupled_solve
 
     case = get_case("notched_strip", {"harmonics": 40, "t_end": 9.6e-5, "tol": 1e-10})
+    monkeypatch.setattr(coupled_solve, "choose", lambda model, solves, nnz: ("whole", {}))
     sparse = solve(case, with_fields=False)
-    monkeypatch.setattr(woodbury, "preferred", lambda model: True)
+    monkeypatch.setattr(coupled_solve, "choose", lambda model, solves, nnz: ("woodbury", {}))
     low_rank = solve(case, with_fields=False)
     assert "Woodbury" in low_rank.info["solve"] and "Woodbury" not in sparse.info["solve"]
     for name, h in sparse.history.items():
         tol = 1e-6 if name.startswith("peps") else 1e-8
         assert np.abs(low_rank.history[name] - h).max() <= tol * max(np.abs(h).max(), 1e-30), name
+
+
+def test_every_form_of_the_coupled_solve_gives_the_same_elastic_histories(monkeypatch):
+    """The elastic path solves the coupled system with the form of least predicted cost
+    (smfem.coupled_solve): whole, Woodbury or warm-started conjugate gradients. The algebra
+    must not change the answer: the same histories to 1e-9 relative."""
+    from smfem import coupled_solve
+
+    case = get_case("notched_strip", {"plastic": False, "harmonics": 40, "t_end": 9.6e-5})
+    runs = {}
+    for form in ("whole", "woodbury", "krylov"):
+        monkeypatch.setattr(coupled_solve, "choose", lambda model, solves, nnz, form=form: (form, {}))
+        runs[form] = solve(case, with_fields=False)
+    assert "Woodbury" in runs["woodbury"].info["solve"] and "conjugate gradients" in runs["krylov"].info["solve"]
+    for form in ("woodbury", "krylov"):
+        for name, h in runs["whole"].history.items():
+            assert np.abs(runs[form].history[name] - h).max() <= 1e-9 * np.abs(h).max(), (form, name)
 
 
 def test_the_field_marks_the_cut_out_cells(tmp_path):

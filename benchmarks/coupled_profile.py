@@ -1,0 +1,170 @@
+"""Where SMFEM's time goes on the scenes whose harmonics couple, against the bare solves.
+
+    python benchmarks/coupled_profile.py [--scenes NAME ...] [--set NAME:KEY=VALUE ...] [--tiny]
+
+For each scene at its cheapest settings within 1 % of its truth in the latest full study (3 %
+on the notched cylinder, which SMFEM does not bring to 1 %): the run's CPU (one thread, no
+profiler), then one run under cProfile, its time split into model build, system set-up
+(factorizations, the Woodbury capacitance), and the march: the block-diagonal factors'
+triangular solves, the Woodbury correction around them, the elastic operator applied (``K x``,
+``M x``), stresses synthesized at the x3 points, the material law, forces projected back,
+probes, the rest. The split is of the profiled run, scaled to the plain run's CPU. Last, the
+bare solves: one block-diagonal solve of the step matrix, timed alone (the least of 30), times
+the run's iterations (an elastic step is one), which is the least any step of this
+discretization can cost; the ratio of the run's CPU to it is what the method's overhead costs.
+Imports (``python -c 'import smfem.solver'``) are listed apart: every entry point pays them once.
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import os
+import pstats
+import subprocess
+import sys
+import time
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+import scipy.sparse as sp  # noqa: E402
+
+from cases import get_case  # noqa: E402
+from smfem.linalg import factorize_spd  # noqa: E402
+from smfem.newmark import Constants  # noqa: E402
+from smfem.solver import solve  # noqa: E402
+
+#: scene -> the cheapest SMFEM settings within 1 % (3 %: notched cylinder) of its truth in the
+#: latest full study (docs/verification.md)
+SCENES = {
+    "moving_load_notched": {"element": "quad9", "harmonics": 480},
+    "moving_load": {"harmonics": 20, "dt": 4e-6},
+    "notched_strip": {"harmonics": 120},
+    "notched_cylinder": {"refine": 8, "harmonics": 160, "bbar": True},
+}
+TINY = {"moving_load_notched": {"harmonics": 40, "t_end": 2e-5}, "moving_load": {"t_end": 2e-5},
+        "notched_strip": {"harmonics": 40, "t_end": 3.2e-5}, "notched_cylinder": {"refine": 1, "harmonics": 20, "t_end": 5e-4}}
+OPTIONS = ("bbar", "iteration_matrix", "direct_max_nonzeros", "x3_oversampling")
+
+#: (category, functions whose cumulative time it is, as (file suffix, function name))
+PARTS = (
+    ("model", (("smfem/model.py", "__init__"),)),
+    ("system set-up", (("smfem/strategy.py", "build"),)),
+    ("march", (("smfem/newmark.py", "march"), ("smfem/gauss.py", "march"))),
+    ("triangular solves", (("smfem/linalg.py", "solve"), ("~", "<method 'solve' of 'SuperLU' objects>"))),
+    ("woodbury", (("smfem/woodbury.py", "solve"),)),
+    ("K x, M x", (("smfem/coupling.py", "K"), ("smfem/coupling.py", "M"))),
+    ("synthesis", (("smfem/sampling.py", "stress"),)),
+    ("law", (("smfem/laws.py", "stress"),)),
+    ("projection", (("smfem/sampling.py", "forces"),)),
+    ("probes", (("smfem/probes.py", "values"),)),
+)
+
+
+def cumulative(stats: pstats.Stats, functions) -> tuple[float, int]:
+    """Cumulative seconds and calls of the functions, summed."""
+    seconds, calls = 0.0, 0
+    for (path, _, name), (_, nc, _, ct, _) in stats.stats.items():
+        if any(path.endswith(suffix) and name == fname for suffix, fname in functions):
+            seconds, calls = seconds + ct, calls + nc
+    return seconds, calls
+
+
+def cumulative_from(stats: pstats.Stats, functions, caller) -> float:
+    """Cumulative seconds of the functions in their calls from ``caller`` (file suffix, name)."""
+    seconds = 0.0
+    for (path, _, name), (_, _, _, _, callers) in stats.stats.items():
+        if any(path.endswith(suffix) and name == fname for suffix, fname in functions):
+            seconds += sum(v[3] for (cpath, _, cname), v in callers.items()
+                           if cpath.endswith(caller[0]) and cname == caller[1])
+    return seconds
+
+
+def split(case_name: str, sets: dict) -> tuple[dict, dict]:
+    """Case parameters and solver options of one scene's settings."""
+    return ({k: v for k, v in sets.items() if k not in OPTIONS}, {k: v for k, v in sets.items() if k in OPTIONS})
+
+
+def bare_solve_seconds(case, options) -> float:
+    """One solve with the step's block-diagonal factors, alone: the least of 30."""
+    from smfem.strategy import Run
+
+    model = Run(case, options).linear_model if not case.material.plastic else None
+    if model is None:
+        from smfem.model import Model
+        model = Model(case, nonlinear=True, bbar=options.bbar)
+    a0 = Constants.of(case.dt).a0
+    blocks = model.homogeneous_blocks if model.coupling else [(s.K, s.M) for s in model.systems]
+    lu = factorize_spd(sp.block_diag([k + sp.diags(a0 * m) for k, m in blocks], format="csr"))
+    b = np.random.default_rng(0).normal(size=model.n_dof)
+    best = float("inf")
+    for _ in range(30):
+        t0 = time.process_time()
+        lu.solve(b)
+        best = min(best, time.process_time() - t0)
+    return best
+
+
+def profile(name: str, sets: dict) -> dict:
+    from smfem.options import SolverOptions
+
+    params, opts = split(name, sets)
+    case = get_case(name, params)
+    options = SolverOptions(**opts)
+    t0 = time.process_time()
+    plain = solve(case, options, with_fields=False)
+    cpu = time.process_time() - t0
+    profiler = cProfile.Profile(time.process_time)
+    profiler.enable()
+    profiled = solve(case, options, with_fields=False)
+    profiler.disable()
+    stats = pstats.Stats(profiler)
+    whole = cumulative(stats, (("smfem/solver.py", "solve"),))[0]
+    row = {"scene": name, "settings": " ".join(f"{k}={v}" for k, v in sets.items()), "n_dof": plain.n_dof,
+           "solve": plain.info["solve"], "cpu_s": cpu}
+    for part, functions in PARTS:
+        row[part] = cumulative(stats, functions)[0] * cpu / whole
+    row["system set-up"] -= row["model"]  # the strategy's factory builds the model first
+    row["woodbury"] -= cumulative_from(stats, PARTS[3][1], ("smfem/woodbury.py", "solve")) * cpu / whole
+    iterations = int(np.sum(profiled.iterations)) if getattr(profiled, "iterations", None) is not None else 0
+    iterations = iterations or int(round(plain.info["iterations_mean"] * (len(plain.t) - 1))) or (len(plain.t) - 1)
+    row["iterations"] = iterations
+    row["bare_solves_s"] = bare_solve_seconds(case, options) * iterations
+    row["cpu_over_bare"] = cpu / row["bare_solves_s"]
+    return row
+
+
+def import_seconds() -> float:
+    out = subprocess.run([sys.executable, "-c", "import time; t = time.process_time(); import smfem.solver; "
+                          "print(time.process_time() - t)"], capture_output=True, text=True, check=True)
+    return float(out.stdout)
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--scenes", nargs="*", default=list(SCENES))
+    parser.add_argument("--set", action="append", default=[], metavar="NAME:KEY=VALUE")
+    parser.add_argument("--tiny", action="store_true", help="short runs (a check that the script works)")
+    args = parser.parse_args(argv)
+    settings = {name: dict(SCENES[name], **(TINY[name] if args.tiny else {})) for name in args.scenes}
+    for item in args.set:
+        name, _, kv = item.partition(":")
+        key, _, value = kv.partition("=")
+        settings[name][key] = value
+    print(f"imports: {import_seconds():.2f} CPU s")
+    columns = ["model", "system set-up", "march", "triangular solves", "woodbury", "K x, M x", "synthesis", "law",
+               "projection", "probes"]
+    print("| scene | settings | dof | CPU s | " + " | ".join(columns) + " | iterations | bare solves s | CPU / bare |")
+    print("|" + "---|" * (len(columns) + 7))
+    for name in args.scenes:
+        r = profile(name, settings[name])
+        print(f"| {r['scene']} | {r['settings']} | {r['n_dof']} | {r['cpu_s']:.2f} | "
+              + " | ".join(f"{r[c]:.2f}" for c in columns)
+              + f" | {r['iterations']} | {r['bare_solves_s']:.2f} | {r['cpu_over_bare']:.1f} |", flush=True)
+        print(f"  ({r['solve']})", flush=True)
+
+
+if __name__ == "__main__":
+    main()
