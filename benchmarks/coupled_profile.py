@@ -51,7 +51,7 @@ OPTIONS = ("bbar", "iteration_matrix", "direct_max_nonzeros", "x3_oversampling")
 #: (category, functions whose cumulative time it is, as (file suffix, function name))
 PARTS = (
     ("model", (("smfem/model.py", "__init__"),)),
-    ("system set-up", (("smfem/strategy.py", "build"),)),
+    ("system set-up", (("smfem/strategy.py", "build_system"),)),
     ("march", (("smfem/newmark.py", "march"), ("smfem/gauss.py", "march"))),
     ("triangular solves", (("smfem/linalg.py", "solve"), ("~", "<method 'solve' of 'SuperLU' objects>"))),
     ("woodbury", (("smfem/woodbury.py", "solve"),)),
@@ -126,7 +126,7 @@ def profile(name: str, sets: dict) -> dict:
            "solve": plain.info["solve"], "cpu_s": cpu}
     for part, functions in PARTS:
         row[part] = cumulative(stats, functions)[0] * cpu / whole
-    row["system set-up"] -= row["model"]  # the strategy's factory builds the model first
+    row["system set-up"] -= row["model"]  # the strategy builds the model first
     row["woodbury"] -= cumulative_from(stats, PARTS[3][1], ("smfem/woodbury.py", "solve")) * cpu / whole
     iterations = int(np.sum(profiled.iterations)) if getattr(profiled, "iterations", None) is not None else 0
     iterations = iterations or int(round(plain.info["iterations_mean"] * (len(plain.t) - 1))) or (len(plain.t) - 1)

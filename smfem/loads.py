@@ -148,10 +148,10 @@ def force_amplitudes(case, mesh: SectionMesh, modes: list[Mode], element: Elemen
     ``int int f(x) N_i psi(x3) dA dx3`` over the section (a body force) or ``ds dx3`` along its
     edge (a traction); a ring's area element carries r. Gauss-Legendre quadrature over each
     element (``element``'s shape functions) or edge segment and along x3."""
-    from cases.manufactured import numeric
-
     if not case.forces:
         return []
+    from cases.manufactured import numeric  # sympy: only where there is a force to evaluate
+
     # along x3: enough points for the force's and the modes' variation (checked by doubling in the tests)
     period = 2 * np.pi if case.body == RING else case.length
     t3, w3 = np.polynomial.legendre.leggauss(4 * case.harmonics + 64)

@@ -115,8 +115,10 @@ class Model:
             self.x3, self.x3_weights = inhomogeneity.x3_quadrature(case, n_harm)
             self.factor = inhomogeneity.element_factor(case, self.mesh, self.x3)
         self.cutout_elements = np.flatnonzero((self.factor != 1.0).any(axis=1))
-        active = [i for i, m in enumerate(candidates) if m in set(symmetry.nonlinear_modes(case, candidates))] \
-            if nonlinear else loaded
+        active = loaded
+        if nonlinear:
+            allowed = set(symmetry.nonlinear_modes(case, candidates))
+            active = [i for i, m in enumerate(candidates) if m in allowed]
         #: the coupling integrals (n_active, n_active, n_profiles, 2, 2) over the elements' few
         #: profiles f(x3) and each element's profile; None where no material varies along x3
         self._I, self._profile = None, None
