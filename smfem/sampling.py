@@ -97,12 +97,13 @@ class DofSeries:
             out[rows] = coefficients[:, rows].T @ self.psi[t]
         return out
 
-    def project(self, duals: np.ndarray) -> np.ndarray:
+    def project(self, duals: np.ndarray, points: np.ndarray | None = None) -> np.ndarray:
         """Stacked amplitudes of ``duals`` (2 n, nq) on the sorted rows: the transpose of
-        :meth:`values` with the points weighted, ``sum_q w_q (psi_c^m U*_j + k_m psi_(1-c)^m W*_j)``."""
+        :meth:`values` with the points weighted, ``sum_q w_q (psi_c^m U*_j + k_m psi_(1-c)^m W*_j)``;
+        ``points``: the duals are at these points only, zero elsewhere."""
         projected = np.empty((2 * self.n_dof, self.n_modes))
         for t, rows in enumerate(self.types):
-            projected[rows] = duals[rows] @ self.psi_w[t]
+            projected[rows] = duals[rows] @ (self.psi_w[t] if points is None else self.psi_w[t][points])
         projected = projected[self.row]
         forces = projected[:self.n_dof].T + self.k[:, None] * projected[self.n_dof:].T  # (modes, n)
         return self.Et @ forces.ravel()
@@ -246,5 +247,11 @@ class SamplePoints:
         return out
 
     def forces(self, sigma: np.ndarray) -> np.ndarray:
-        """Internal force amplitudes (14) of all modes, stacked, of stresses at the points."""
-        return self.series.project(self.from_stress @ sigma.reshape(-1, len(self.x3)))
+        """Internal force amplitudes (14) of all modes, stacked, of stresses at the points;
+        only the points along x3 where some stress is not zero are projected (the plastic
+        iterations' relaxed stresses are zero wherever the body has not yielded)."""
+        rows = sigma.reshape(-1, len(self.x3))
+        live = np.flatnonzero(rows.any(axis=0))
+        if len(live) == len(self.x3):
+            return self.series.project(self.from_stress @ rows)
+        return self.series.project(self.from_stress @ rows[:, live], live)
