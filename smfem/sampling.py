@@ -88,14 +88,24 @@ class DofSeries:
         self.E = sp.block_diag([sp.csr_matrix(s.T[dofs]) for s in S], format="csr")  # stacked -> (modes, dofs)
         self.Et = self.E.T.tocsr()
 
+    def coefficients(self, u: np.ndarray) -> np.ndarray:
+        """The series' coefficients per mode of stacked amplitudes ``u``: (modes, 2 n), sorted rows."""
+        N = (self.E @ u).reshape(self.n_modes, self.n_dof)
+        return np.concatenate([N, N * self.k[:, None]], axis=1)[:, self.source]
+
     def values(self, u: np.ndarray) -> np.ndarray:
         """The series of stacked amplitudes ``u`` at the points: (2 n, nq), sorted rows."""
-        N = (self.E @ u).reshape(self.n_modes, self.n_dof)
-        coefficients = np.concatenate([N, N * self.k[:, None]], axis=1)[:, self.source]  # (modes, 2 n)
+        coefficients = self.coefficients(u)
         out = np.empty((2 * self.n_dof, self.psi.shape[2]))
         for t, rows in enumerate(self.types):
             out[rows] = coefficients[:, rows].T @ self.psi[t]
         return out
+
+    def amplitudes(self, projected: np.ndarray) -> np.ndarray:
+        """Stacked amplitudes of the series' projections onto each mode, (2 n, modes) on the
+        sorted rows: ``U*`` as it is, ``W*`` times the mode's wavenumber."""
+        projected = projected[self.row]
+        return self.Et @ (projected[:self.n_dof].T + self.k[:, None] * projected[self.n_dof:].T).ravel()
 
     def project(self, duals: np.ndarray, points: np.ndarray | None = None) -> np.ndarray:
         """Stacked amplitudes of ``duals`` (2 n, nq) on the sorted rows: the transpose of
@@ -104,9 +114,7 @@ class DofSeries:
         projected = np.empty((2 * self.n_dof, self.n_modes))
         for t, rows in enumerate(self.types):
             projected[rows] = duals[rows] @ (self.psi_w[t] if points is None else self.psi_w[t][points])
-        projected = projected[self.row]
-        forces = projected[:self.n_dof].T + self.k[:, None] * projected[self.n_dof:].T  # (modes, n)
-        return self.Et @ forces.ravel()
+        return self.amplitudes(projected)
 
 
 def series_index(dofs: np.ndarray, elements: np.ndarray) -> np.ndarray:

@@ -73,9 +73,9 @@ class CutoutWoodbury:
         for i, (lu, Ei) in enumerate(zip(lus, E)):
             lam, Q = np.linalg.eigh(Ei @ lu.solve(Ei.T.toarray()))  # G_l, semidefinite where a mode lacks a dof
             root = Q * np.sqrt(np.clip(lam, 0.0, None))  # G_l = root root'
-            values, slopes = psi[comp_type, i].T, k[i] * psi[1 - comp_type, i].T  # (nq, dofs): U and W of unit amplitudes
-            W = (np.einsum("qdr,qd->qrd", F[:, :n_dof], values, optimize=True)
-                 + np.einsum("qdr,qd->qrd", F[:, n_dof:], slopes, optimize=True)).reshape(-1, n_dof)
+            unit_u, unit_w = psi[comp_type, i].T, k[i] * psi[1 - comp_type, i].T  # (nq, dofs): U and W of unit amplitudes
+            W = (np.einsum("qdr,qd->qrd", F[:, :n_dof], unit_u, optimize=True)
+                 + np.einsum("qdr,qd->qrd", F[:, n_dof:], unit_w, optimize=True)).reshape(-1, n_dof)
             Y.append(W @ root)
         Y = np.hstack(Y)
         # I - Y Y' in the lower triangle, one symmetric rank-k update
