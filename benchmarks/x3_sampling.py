@@ -1,6 +1,6 @@
 """Synthesis along x3 and projection back, per call of the plastic iterations (issue 57).
 
-    python benchmarks/x3_sampling.py [--tiny] [--scenes NAME ...] [--harmonics H ...] [--repeat N]
+    python benchmarks/x3_sampling.py [--tiny] [--scenes NAME ...] [--harmonics H ...] [--repeat N] [--runs H ...]
 
 For each scene and harmonic count: the stress points (stress rows, the series' rows, points
 along x3 by today's rule, ``cases/x3_points.csv``) and the time of one ``stress`` plus one
@@ -13,11 +13,15 @@ along x3 by today's rule, ``cases/x3_points.csv``) and the time of one ``stress`
 * ``finufft``: the same series by nonuniform FFTs at the same points (FINUFFT, type 2 for the
   synthesis, type 1 for the projection, tolerance 1e-13, two real rows packed into one complex
   transform; ``-`` where finufft is not installed);
-* ``uniform``: the series by DST/DCT on ``H + 1`` uniform points (the midpoint rule, exact for
-  the modes' products over a prism's whole length: the rule a body without cut-out edges could
-  use; the notched scenes cannot, so this is what such a body would pay, not these scenes).
+* ``uniform``: the series by DST/DCT on ``H + 1`` uniform points, or the next size FFTs like
+  (``uniform points``): the midpoint rule, exact for the modes' products over a prism's whole
+  length, the rule a body without cut-out edges could use (the notched scenes cannot: this is
+  what such a body would pay, not these scenes); ``uniform, dense``: the same points by the
+  series' dense products (fewer points alone).
 
-Each fast variant is checked against the dense products (1e-10 of the largest value).
+Each fast variant is checked against the dense products (1e-10 of the largest value). Then
+whole runs of the notched moving load at ``--runs`` harmonics: their CPU and the share of it
+inside ``stress`` and ``forces`` (issue 57: at most 10 % at 480 harmonics).
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ from smfem.assembly import element_dofs
 from smfem.elements import DOFS_PER_NODE
 from smfem.model import Model
 from smfem.sampling import DofSeries, SamplePoints, carried_dofs
+from smfem.solver import solve
 
 SCENES = ("moving_load_notched", "notched_strip")
 HARMONICS = (60, 120, 240, 480)
@@ -133,7 +138,7 @@ class NonuniformSeries:
 
 
 class UniformSeries:
-    """The series' products on ``H + 1`` uniform points of a prism (midpoints of equal cells
+    """The series' products on ``H + 1`` or a few more uniform points of a prism (midpoints of equal cells
     over the length) by DST/DCT: psi1 ``sin(l pi x / L)`` by types III (synthesis) and II
     (projection), psi3 ``cos`` likewise; a prism's modes are ``l = 1 ... H``."""
 
@@ -141,7 +146,7 @@ class UniformSeries:
         if model.body != "prism":
             raise ValueError("the uniform grid here is a prism's")
         self.l = np.array([s.mode.l for s in model.systems])
-        self.n = int(self.l.max()) + 1
+        self.n = scipy.fft.next_fast_len(int(self.l.max()) + 1, real=True)  # H + 1 or the next size FFTs like
         self.weight = model.length / self.n
         x3 = (np.arange(self.n) + 0.5) * self.weight
         self.series = DofSeries(model, carried_dofs(model), x3, np.full(self.n, self.weight))
@@ -152,7 +157,7 @@ class UniformSeries:
         out = np.empty((2 * s.n_dof, self.n))
         for t, rows in enumerate(s.types):
             grid = np.zeros((rows.stop - rows.start, self.n))
-            if t == 0:  # DST-III: x_k at frequency k + 1, halved (the last, l = H + 1, is 0)
+            if t == 0:  # DST-III: x_k at frequency k + 1, halved (none at the last, l = n)
                 grid[:, self.l - 1] = 0.5 * coefficients[rows]
                 out[rows] = scipy.fft.dst(grid, type=3, axis=1, workers=1)
             else:  # DCT-III: x_k at frequency k, halved but x_0 (l = 0, absent)
@@ -223,12 +228,41 @@ def measure(name: str, harmonics: int, repeat: int) -> dict:
     return out
 
 
+def run_share(harmonics: int, sets: dict) -> str:
+    """A moving_load_notched run's CPU and the share of it inside ``SamplePoints.stress`` and
+    ``.forces`` (process time)."""
+    spent = {"stress": 0.0, "forces": 0.0}
+    originals = {name: getattr(SamplePoints, name) for name in spent}
+
+    def timed(name, method):
+        def wrapper(self, *args):
+            t0 = time.process_time()
+            try:
+                return method(self, *args)
+            finally:
+                spent[name] += time.process_time() - t0
+        return wrapper
+
+    for name, method in originals.items():
+        setattr(SamplePoints, name, timed(name, method))
+    try:
+        t0 = time.process_time()
+        solve(get_case("moving_load_notched", {"harmonics": harmonics, **sets}), with_fields=False)
+        total = time.process_time() - t0
+    finally:
+        for name, method in originals.items():
+            setattr(SamplePoints, name, method)
+    return (f"moving_load_notched run, {harmonics} harmonics: CPU {total:.2f} s, stress {spent['stress']:.2f} s, "
+            f"forces {spent['forces']:.2f} s: x3 sampling {100 * sum(spent.values()) / total:.1f} % of the run")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tiny", action="store_true", help="one small size (the tests run every benchmark so)")
     ap.add_argument("--scenes", nargs="+", default=SCENES)
     ap.add_argument("--harmonics", nargs="+", type=int, default=HARMONICS)
     ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--runs", nargs="*", type=int, default=(240, 480), help="harmonics of whole runs to measure")
     args = ap.parse_args(argv)
     scenes, counts, repeat = (SCENES[-1:], (20,), 1) if args.tiny else (args.scenes, args.harmonics, args.repeat)
     columns = ("scene", "H", "modes", "stress rows", "series rows", "points", "rows", "series", "finufft",
@@ -239,6 +273,8 @@ def main(argv=None):
             row = measure(name, harmonics, repeat)
             print(" | ".join("-" if row.get(c) is None else f"{row[c]:.2f}" if isinstance(row[c], float) else str(row[c])
                              for c in columns), flush=True)
+    for harmonics in (20,) if args.tiny else args.runs:
+        print(run_share(harmonics, {"t_end": 5 * get_case("moving_load_notched").dt} if args.tiny else {}), flush=True)
 
 
 if __name__ == "__main__":

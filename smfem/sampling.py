@@ -61,6 +61,9 @@ class DofSeries:
     the products along x3 (modes times points) act on two rows per dof instead of six stress
     rows per section sample point (on a large mesh of 4-node elements a quarter). The rows are
     sorted by basis type, one matrix product per type; :attr:`row` says where each series is.
+    The products are dense on purpose: at today's Gauss-Legendre points nonuniform FFTs
+    (FINUFFT, O(H log H)) lose to them up to about 1400 harmonics on this project's scenes
+    (measured, ``benchmarks/x3_sampling.py`` and its table in ``benchmarks/README.md``).
 
     Parameters
     ----------
