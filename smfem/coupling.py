@@ -54,7 +54,7 @@ class StackedOperator:
         m_weight = np.zeros((len(nodes), len(x3)))
         np.add.at(m_weight, where, share)
         self.m_weight = m_weight[np.searchsorted(nodes, dofs // DOFS_PER_NODE)]  # per carried dof
-        self.values_rows = self.series.row[:len(dofs)]  # the sorted rows of the values V (not the slopes W)
+        self.values_rows = self.series.row[:len(dofs)]  # the sorted rows of the displacements U (not of W)
 
     def K(self, x: np.ndarray) -> np.ndarray:
         if self.series is None:

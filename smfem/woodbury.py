@@ -4,10 +4,10 @@
 ``dA`` carries ``f - 1``, nonzero only in the cut-out elements over the cut-outs' x3 intervals.
 At a Gauss-Legendre point ``q`` of those intervals the strains of every mode together are
 ``Ba U(q) + Bb W(q)``, with ``U, W`` the two series along x3 of each cut-out dof
-(:class:`smfem.sampling.DofSeries`: its displacement, and the series the wavenumber weights),
-so ``dA = sum_q w_q Z_q' H_q Z_q`` with ``Z_q x = (U(q), W(q))`` and ``H_q`` the
-``(f - 1)``-weighted energy of the cut-out elements in those values (moment-scheme stiffness
-and lumped mass on ``U``). Its rank is at most the points times twice the cut-out dofs,
+(:class:`smfem.sampling.DofSeries`: its displacement, and the wavenumber-weighted series in
+the other basis type), so ``dA = sum_q w_q Z_q' H_q Z_q`` with ``Z_q x = (U(q), W(q))`` and
+``H_q`` the ``(f - 1)``-weighted energy of the cut-out elements in those values (moment-scheme
+stiffness and lumped mass on ``U``). Its rank is at most the points times twice the cut-out dofs,
 however many harmonics there are: the notched strip at 400 harmonics couples 4800
 amplitudes through the notch, of rank 1968. With ``H_q = -F_q F_q'`` (``f < 1``) and
 ``V = F' Z``: ``A = A_h - V'V`` and ``A^-1 = A_h^-1 + A_h^-1 V' S^-1 V A_h^-1``,
