@@ -22,34 +22,136 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import fourier, inhomogeneity
-from .assembly import element_dofs
+from .assembly import element_dofs, node_dofs
 from .elements import DOFS_PER_NODE
 
 
-def _rows_of_type(t: int) -> slice:
-    """The stress rows of basis type ``t``, a slice (a view, not a copy, per synthesis)."""
-    rows = np.flatnonzero(fourier.ROW_TYPE == t)
-    assert np.array_equal(rows, np.arange(rows[0], rows[-1] + 1)), "rows of one type must be contiguous"
-    return slice(int(rows[0]), int(rows[-1]) + 1)
+def carried_dofs(model, nodes: np.ndarray | None = None) -> np.ndarray:
+    """Full dofs of ``nodes`` (all: None) that some mode carries, sorted."""
+    dofs = np.arange(DOFS_PER_NODE * model.mesh.n_nodes) if nodes is None else node_dofs(nodes).ravel()
+    carried = np.zeros(DOFS_PER_NODE * model.mesh.n_nodes, bool)
+    for s in model.systems:
+        carried[s.T.nonzero()[0]] = True
+    return dofs[carried[dofs]]
 
 
-#: stress rows by basis type along x3 (0: psi1, 1: psi3)
-ROWS = (_rows_of_type(0), _rows_of_type(1))
+def linear_parts(ops) -> tuple[np.ndarray, np.ndarray]:
+    """``(Ba, Bb)`` (ne, ng, 6, d), ``at_samples(p) = Ba + p Bb``, checked to pair a strain row
+    with dofs of its own basis type along x3 in ``Ba`` and of the other type in ``Bb`` (the
+    form :class:`DofSeries` needs)."""
+    Ba, Bb = ops.sample_linear_parts()
+    comp_type = (np.arange(Ba.shape[-1]) % DOFS_PER_NODE == 2).astype(int)
+    linked = fourier.ROW_TYPE[:, None] != comp_type[None, :]
+    if np.any(Ba[..., linked]) or np.any(Bb[..., ~linked]):
+        raise ValueError("a strain row mixes basis types along x3: no form per dof along x3")
+    return Ba, Bb
 
 
-def sample_operators(model, elements: np.ndarray | slice = slice(None)) -> np.ndarray:
-    """``B`` of every mode at the sample points of ``elements``: (n_modes, ne, ng, 6, d)."""
-    ops = model.ops.subset(np.arange(model.mesh.n_elements)[elements])
-    return np.stack([ops.at_samples(fourier.wavenumber(s.mode, model.body, model.length)) for s in model.systems])
+class DofSeries:
+    """Stacked mode amplitudes as two series along x3 per section dof, and the transpose.
+
+    The strain of mode ``m`` at a section sample point is ``(Ba + k_m Bb) u_m`` (:func:`linear_parts`),
+    where ``Ba`` pairs a strain row only with dofs of the row's own basis type along x3 and
+    ``Bb`` only with those of the other type (:data:`smfem.fourier.ROW_TYPE`; a dof of an in-plane
+    component goes as psi1, of the x3 component as psi3). So the strains of all modes at a point
+    ``x3`` are ``Ba U(x3) + Bb W(x3)``, with per dof ``j`` of basis type ``c``
+
+        U_j = sum_m psi_c^m(x3) u_mj,    W_j = sum_m k_m psi_(1-c)^m(x3) u_mj:
+
+    the products along x3 (modes times points) act on two rows per dof instead of six stress
+    rows per section sample point (on a large mesh of 4-node elements a quarter). The rows are
+    sorted by basis type, one matrix product per type; :attr:`row` says where each series is.
+    The products are dense on purpose: at today's Gauss-Legendre points nonuniform FFTs
+    (FINUFFT, O(H log H)) lose to them up to about 1400 harmonics on this project's scenes
+    (measured, ``benchmarks/x3_sampling.py`` and its table in ``benchmarks/README.md``).
+
+    Parameters
+    ----------
+    model : the :class:`smfem.model.Model` whose stacked amplitudes these are
+    dofs : (n,) full dofs, sorted, that some mode carries (:func:`carried_dofs`)
+    x3 : (nq,) points along x3
+    weights : (nq,) the points' weights in :meth:`project`
+    """
+
+    def __init__(self, model, dofs: np.ndarray, x3: np.ndarray, weights: np.ndarray):
+        S = model.systems
+        self.n_modes, self.n_dof = len(S), len(dofs)
+        self.k = np.array([fourier.wavenumber(s.mode, model.body, model.length) for s in S])
+        comp_type = (dofs % DOFS_PER_NODE == 2).astype(int)
+        row_type = np.concatenate([comp_type, 1 - comp_type])  # U rows, then W rows
+        #: the series (U_j: j, W_j: n + j) of each sorted row
+        self.source = np.argsort(row_type, kind="stable")
+        #: the sorted row of each series (U_j: j, W_j: n + j)
+        self.row = np.argsort(self.source)
+        n_first = int(np.sum(row_type == 0))
+        self.types = (slice(0, n_first), slice(n_first, 2 * self.n_dof))
+        psi = np.array([fourier.psi(s.mode, x3, model.body, model.length) for s in S])  # (modes, 2, nq)
+        self.psi = psi.transpose(1, 0, 2).copy()  # (2, modes, nq): synthesis per basis type
+        self.psi_w = (psi * weights).transpose(1, 2, 0).copy()  # (2, nq, modes): weighted projection
+        self.E = sp.block_diag([sp.csr_matrix(s.T[dofs]) for s in S], format="csr")  # stacked -> (modes, dofs)
+        self.Et = self.E.T.tocsr()
+
+    def coefficients(self, u: np.ndarray) -> np.ndarray:
+        """The series' coefficients per mode of stacked amplitudes ``u``: (modes, 2 n), sorted rows."""
+        N = (self.E @ u).reshape(self.n_modes, self.n_dof)
+        return np.concatenate([N, N * self.k[:, None]], axis=1)[:, self.source]
+
+    def values(self, u: np.ndarray) -> np.ndarray:
+        """The series of stacked amplitudes ``u`` at the points: (2 n, nq), sorted rows."""
+        coefficients = self.coefficients(u)
+        out = np.empty((2 * self.n_dof, self.psi.shape[2]))
+        for t, rows in enumerate(self.types):
+            out[rows] = coefficients[:, rows].T @ self.psi[t]
+        return out
+
+    def amplitudes(self, projected: np.ndarray) -> np.ndarray:
+        """Stacked amplitudes of the series' projections onto each mode, (2 n, modes) on the
+        sorted rows: ``U*`` as it is, ``W*`` times the mode's wavenumber."""
+        projected = projected[self.row]
+        return self.Et @ (projected[:self.n_dof].T + self.k[:, None] * projected[self.n_dof:].T).ravel()
+
+    def project(self, duals: np.ndarray, points: np.ndarray | None = None) -> np.ndarray:
+        """Stacked amplitudes of ``duals`` (2 n, nq) on the sorted rows: the transpose of
+        :meth:`values` with the points weighted, ``sum_q w_q (psi_c^m U*_j + k_m psi_(1-c)^m W*_j)``;
+        ``points``: the duals are at these points only, zero elsewhere."""
+        projected = np.empty((2 * self.n_dof, self.n_modes))
+        for t, rows in enumerate(self.types):
+            projected[rows] = duals[rows] @ (self.psi_w[t] if points is None else self.psi_w[t][points])
+        return self.amplitudes(projected)
 
 
-def element_scatter(model, elements: np.ndarray | slice = slice(None)) -> sp.csr_matrix:
-    """The sparse map from per-mode element-dof values (n_modes, ne, d), raveled, to the
-    stacked reduced amplitudes; its transpose gathers the element dofs of every mode."""
-    dofs = element_dofs(model.mesh.elements[elements])
-    n_full = DOFS_PER_NODE * model.mesh.n_nodes
-    scatter = sp.csr_matrix((np.ones(dofs.size), (dofs.ravel(), np.arange(dofs.size))), shape=(n_full, dofs.size))
-    return sp.block_diag([s.T.T @ scatter for s in model.systems], format="csr")
+def series_index(dofs: np.ndarray, elements: np.ndarray) -> np.ndarray:
+    """(ne, 2 d) the series ``U`` (``j``) and ``W`` (``n + j``) of each element dof among ``dofs``
+    (n,), and -1 for the dofs no mode carries (they have no series)."""
+    local = element_dofs(elements)
+    position = np.minimum(np.searchsorted(dofs, local), len(dofs) - 1)
+    index = np.where(dofs[position] == local, position, -1)
+    return np.concatenate([index, np.where(index >= 0, index + len(dofs), -1)], axis=1)
+
+
+def section_maps(model, series: DofSeries, dofs: np.ndarray,
+                 elements: np.ndarray | slice = slice(None)) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """The sparse maps between the series of ``dofs`` at a point along x3 and the stresses
+    there at the sample points of ``elements``, rows ``(6, ne, ng)`` raveled: ``D (Ba U + Bb W)``,
+    and the transpose of ``Ba U + Bb W`` weighted by the sample points' volumes (the forces),
+    summed over the elements of each dof."""
+    elements = np.arange(model.mesh.n_elements)[elements]
+    Ba, Bb = linear_parts(model.ops.subset(elements))
+    ne, ng, _, d = Ba.shape
+    B = np.concatenate([Ba, Bb], axis=3)  # (ne, ng, 6, 2 d) on (U, W) of the element's dofs
+    DB = model.element_D(elements, 1) @ B
+    index = series_index(dofs, model.mesh.elements[elements])
+    column = np.where(index >= 0, series.row[index], -1)
+    row = np.arange(6 * ne * ng).reshape(6, ne, ng).transpose(1, 2, 0)  # (ne, ng, 6)
+    keep = np.broadcast_to((column >= 0)[:, None, None, :], B.shape)
+    rows = np.broadcast_to(row[..., None], B.shape)[keep]
+    columns = np.broadcast_to(column[:, None, None, :], B.shape)[keep]
+    shape = (6 * ne * ng, 2 * series.n_dof)
+    to_stress = sp.csr_matrix((DB[keep], (rows, columns)), shape=shape)
+    B = B * model.ops.sample_weights[elements][:, :, None, None]
+    from_stress = sp.csr_matrix((B[keep], (columns, rows)), shape=shape[::-1])
+    to_stress.eliminate_zeros(), from_stress.eliminate_zeros()
+    return to_stress, from_stress
 
 
 class Symmetry:
@@ -122,8 +224,8 @@ class SamplePoints:
     """Linear maps between mode amplitudes and stresses and forces at the sample points.
 
     An isotropic D couples only strain rows with the same basis function along x3, so the
-    elastic stress of a mode is ``psi(x3) * (D B u)``: D acts on the small per-element
-    amplitudes; the sums over modes and points are one matrix product per row type.
+    elastic stress at a point is ``f D (Ba U + Bb W)`` of the series of the section's dofs
+    along x3 (:class:`DofSeries`): one sparse product in the section per row of points.
     """
 
     def __init__(self, model, oversampling: float, at_least: int = 0):
@@ -133,19 +235,10 @@ class SamplePoints:
         self.factor = inhomogeneity.element_factor(model.case, model.mesh, self.x3)  # (ne, n_x3)
         self.scale = self.factor[None, :, None, :]
         self.homogeneous = bool(np.all(self.factor == 1.0))  # no contrast material: no scaling
-        psi = np.array([fourier.psi(s.mode, self.x3, model.body, model.length) for s in model.systems])
-        self.psi = psi.transpose(1, 0, 2).copy()  # (2, n_modes, n_x3): synthesis per row type
-        self.psi_w = (psi * self.w).transpose(1, 2, 0).copy()  # (2, n_x3, n_modes): weighted projection
-        B = sample_operators(model)  # (n_modes, ne, ng, 6, d)
-        self.shape = B.shape[:3]
-        n_modes, ne, ng = self.shape
-        d = B.shape[-1]
-        # D B for the stresses of the amplitudes; B' weighted by the point's volume for the forces
-        self.DB = (model.element_D(spread=1) @ B).reshape(n_modes * ne, ng * 6, d)
-        self.Bt = (B * model.ops.sample_weights[None, :, :, None, None]).reshape(n_modes * ne, ng * 6, d).transpose(0, 2, 1).copy()
-        self.G = element_scatter(model)
-        self.Gt = self.G.T.tocsr()
-        self.point_shape = (6, ne, ng, len(self.x3))
+        dofs = carried_dofs(model)
+        self.series = DofSeries(model, dofs, self.x3, self.w)
+        self.to_stress, self.from_stress = section_maps(model, self.series, dofs)
+        self.point_shape = (6, model.mesh.n_elements, model.ops.sample_weights.shape[1], len(self.x3))
 
     def unfolded(self, values: np.ndarray, rows: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """The points over the whole period and a point array (..., n_x3) on them; ``rows``:
@@ -154,30 +247,22 @@ class SamplePoints:
         full, index, mirrored = self.images
         out = values[..., index]
         if rows:
-            out[ROWS[1]] *= np.where(mirrored, -1.0, 1.0)
+            out[fourier.ROW_TYPE == 1] *= np.where(mirrored, -1.0, 1.0)
         return full, out
-
-    def amplitudes(self, u: np.ndarray) -> np.ndarray:
-        """``D B u`` of stacked amplitudes at the section points, rows first: (6, ne * ng, n_modes)."""
-        n_modes, ne, ng = self.shape
-        a = (self.DB @ (self.Gt @ u).reshape(n_modes * ne, -1, 1)).reshape(n_modes, ne * ng, 6)
-        return a.transpose(2, 1, 0)
 
     def stress(self, u: np.ndarray) -> np.ndarray:
         """Elastic stresses (6, ne, ng, n_x3) of stacked amplitudes ``u``."""
-        a = self.amplitudes(u)
-        out = np.empty((6, a.shape[1], len(self.x3)))
-        for t, rows in enumerate(ROWS):
-            out[rows] = a[rows] @ self.psi[t]
-        out = out.reshape(self.point_shape)
-        return out if self.homogeneous else out * self.scale
+        out = (self.to_stress @ self.series.values(u)).reshape(self.point_shape)
+        if not self.homogeneous:
+            out *= self.scale
+        return out
 
     def forces(self, sigma: np.ndarray) -> np.ndarray:
-        """Internal force amplitudes (14) of all modes, stacked, of stresses at the points."""
-        n_modes, ne, ng = self.shape
-        projected = np.empty((6, ne * ng, n_modes))
-        rows_of = sigma.reshape(6, ne * ng, -1)
-        for t, rows in enumerate(ROWS):
-            projected[rows] = rows_of[rows] @ self.psi_w[t]
-        per_point = projected.transpose(2, 1, 0).reshape(n_modes * ne, ng * 6, 1)  # (mode and element, ng x 6)
-        return self.G @ (self.Bt @ per_point).ravel()
+        """Internal force amplitudes (14) of all modes, stacked, of stresses at the points;
+        only the points along x3 where some stress is not zero are projected (the plastic
+        iterations' relaxed stresses are zero wherever the body has not yielded)."""
+        rows = sigma.reshape(-1, len(self.x3))
+        live = np.flatnonzero(rows.any(axis=0))
+        if len(live) == len(self.x3):
+            return self.series.project(self.from_stress @ rows)
+        return self.series.project(self.from_stress @ rows[:, live], live)
