@@ -1,15 +1,15 @@
 """The 3D reference on sections that reach the axis (reference_fem/ties.py), and SMFEM against it.
 
-    python benchmarks/axis_reference.py [--manufactured] [--puck] [--fine] [--tiny]
+    python benchmarks/axis_reference.py [--manufactured] [--puck] [--fine] [--halve] [--tiny]
 
 ``--manufactured``: the motion through the axis (cases/verification_axis.py, five steps of t^2,
 exact in time): the 3D reference's L2 error with the section split k x k and 4 k elements round,
 k = 1, 2, 3, and SMFEM's (moment4 and quad9, k = 1 ... 8), with the observed orders.
 
 ``--puck``: the example examples/puck_strike.toml (a gmsh disc through the axis, struck off it),
-all at the scene's step: SMFEM (quad9, refine 1, 2, 4) and the 3D reference (refine 1 with 32
-and 64 elements round; ``--fine`` adds refine 2 with 64 round: 292k unknowns, about 20 CPU min
-and 16 GB) against each other (the spatial difference: same step, solver against solver) and
+all at the scene's step (``--halve``: half of it): SMFEM (quad9, refine 1, 2, 4) and the 3D
+reference on the mirror half (refine 1 with 32 and 64 elements round; ``--fine`` adds SMFEM at
+refine 8 and the 3D reference at refine 2 with 64 round: 146k unknowns) against each other (the spatial difference: same step, solver against solver) and
 against the harmonic model integrated exactly in time (reference-modal, refine 2, its harmonics
 decomposed whole: the total error, time included). Per run: unknowns, CPU, and per probe the
 relative max-norm difference.
@@ -71,17 +71,23 @@ def difference(a, b) -> dict[str, float]:
                         / np.abs(b.history[name]).max()) for name in b.history}
 
 
-def puck(fine: bool, tiny: bool) -> None:
-    over = {"t_end": 2 * get_case(PUCK).dt} if tiny else {}
+def puck(fine: bool, tiny: bool, halve: bool = False) -> None:
+    dt = get_case(PUCK).dt / (2 if halve else 1)
+    over = {"dt": dt, **({"t_end": 2 * dt} if tiny else {})}
     runs = {}
     levels = [("smfem-quad9", {"refine": k, "harmonics": h}) for k, h in ((1, 32), (2, 32), (4, 48))]
-    levels += [("reference-3d", {"refine": 1, "theta_elements": 32}), ("reference-3d", {"refine": 1, "theta_elements": 64})]
+    # the 3D reference on the half 0 <= theta <= pi (the strike is mirror-symmetric; the whole's
+    # histories to 6e-13, tests/test_reference_axis.py): half the unknowns and memory
+    levels += [("reference-3d", {"refine": 1, "theta_elements": 32, "mirror": True}),
+               ("reference-3d", {"refine": 1, "theta_elements": 64, "mirror": True})]
     if fine:
-        levels.append(("reference-3d", {"refine": 2, "theta_elements": 64}))
+        levels.insert(3, ("smfem-quad9", {"refine": 8, "harmonics": 48}))
+        levels.append(("reference-3d", {"refine": 2, "theta_elements": 64, "mirror": True}))
     levels.append(("reference-modal", {"refine": 2}))
     if tiny:
-        levels = [levels[0], ("reference-3d", {"refine": 1, "theta_elements": 8}), ("reference-modal", {"refine": 1})]
-    print(f"puck_strike ({PUCK.name}), dt {get_case(PUCK).dt:g} s")
+        levels = [levels[0], ("reference-3d", {"refine": 1, "theta_elements": 8, "mirror": True}),
+                  ("reference-modal", {"refine": 1})]
+    print(f"puck_strike ({PUCK.name}), dt {dt:g} s")
     for solver, params in levels:
         run, cpu = timed(solver, get_case(PUCK, {**over, **params}))
         label = f"{solver} " + " ".join(f"{k}={v}" for k, v in params.items())
@@ -102,7 +108,9 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--manufactured", action="store_true")
     ap.add_argument("--puck", action="store_true")
-    ap.add_argument("--fine", action="store_true", help="the puck's 3D reference at refine 2 too (16 GB)")
+    ap.add_argument("--fine", action="store_true", help="the puck's 3D reference at refine 2 too (about 8 GB, "
+                    "20 CPU min at the scene's step) and SMFEM at refine 8")
+    ap.add_argument("--halve", action="store_true", help="the puck's runs at half the scene's step")
     ap.add_argument("--tiny", action="store_true", help="one level, a step or two (the tests run it so)")
     args = ap.parse_args(argv)
     threads.pin()
@@ -110,7 +118,7 @@ def main(argv=None) -> int:
     if args.manufactured or both:
         manufactured(args.tiny)
     if args.puck or both:
-        puck(args.fine, args.tiny)
+        puck(args.fine, args.tiny, args.halve)
     return 0
 
 
