@@ -1,6 +1,6 @@
 """Where SMFEM's time goes on the scenes whose harmonics couple, against the bare solves.
 
-    python benchmarks/coupled_profile.py [--scenes NAME ...] [--set NAME:KEY=VALUE ...] [--tiny]
+    python benchmarks/coupled_profile.py [--scenes NAME ...] [--set NAME:KEY=VALUE ...] [--forms] [--tiny]
 
 For each scene at its cheapest settings within 1 % of its truth in the latest full study (3 %
 on the notched cylinder, which SMFEM does not bring to 1 %): the run's CPU (one thread, no
@@ -13,6 +13,10 @@ bare solves: one block-diagonal solve of the step matrix, timed alone (the least
 the run's iterations (an elastic step is one), which is the least any step of this
 discretization can cost; the ratio of the run's CPU to it is what the method's overhead costs.
 Imports (``python -c 'import smfem.solver'``) are listed apart: every entry point pays them once.
+
+``--forms``: the forms of the coupled solve (:mod:`smfem.coupled_solve`) side by side on the
+elastic notched scenes, each run forced to one form: CPU (the least of two), the predicted flops
+of the run, and which form the prediction chooses.
 """
 
 from __future__ import annotations
@@ -136,6 +140,39 @@ def profile(name: str, sets: dict) -> dict:
     return row
 
 
+#: elastic runs whose harmonics couple, for ``--forms``
+FORM_RUNS = (("moving_load_notched", {"plastic": False, "harmonics": 240}),
+             ("notched_strip", {"plastic": False, "harmonics": 120}),
+             ("notched_cylinder", {"plastic": False, "refine": 4, "harmonics": 80}))
+TINY_FORMS = (("notched_strip", {"plastic": False, "harmonics": 40, "t_end": 3.2e-5}),)
+
+
+def forms(runs) -> None:
+    """Each form of the coupled solve forced in turn on elastic runs, against the prediction."""
+    from smfem import coupled_solve
+    from smfem.model import Model
+
+    chooser = coupled_solve.choose
+    print("| scene | settings | form | CPU s | predicted Gflop | chosen |")
+    print("|---|---|---|---|---|---|")
+    try:
+        for name, sets in runs:
+            case = get_case(name, sets)
+            chosen, costs = chooser(Model(case), case.n_steps, 10**12)
+            for form in ("whole", "woodbury", "krylov"):
+                coupled_solve.choose = lambda model, solves, nnz, form=form: (form, {})
+                cpu = []
+                for _ in range(2):
+                    t0 = time.process_time()
+                    solve(case, with_fields=False)
+                    cpu.append(time.process_time() - t0)
+                flops = f"{costs[form].total(case.n_steps) / 1e9:.1f}" if form in costs else "-"
+                print(f"| {name} | {' '.join(f'{k}={v}' for k, v in sets.items())} | {form} | {min(cpu):.2f} | {flops} "
+                      f"| {'yes' if form == chosen else ''} |", flush=True)
+    finally:
+        coupled_solve.choose = chooser
+
+
 def import_seconds() -> float:
     out = subprocess.run([sys.executable, "-c", "import time; t = time.process_time(); import smfem.solver; "
                           "print(time.process_time() - t)"], capture_output=True, text=True, check=True)
@@ -146,8 +183,12 @@ def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenes", nargs="*", default=list(SCENES))
     parser.add_argument("--set", action="append", default=[], metavar="NAME:KEY=VALUE")
+    parser.add_argument("--forms", action="store_true", help="the coupled solve's forms side by side, elastic runs")
     parser.add_argument("--tiny", action="store_true", help="short runs (a check that the script works)")
     args = parser.parse_args(argv)
+    if args.forms:
+        forms(TINY_FORMS if args.tiny else FORM_RUNS)
+        return
     settings = {name: dict(SCENES[name], **(TINY[name] if args.tiny else {})) for name in args.scenes}
     for item in args.set:
         name, _, kv = item.partition(":")

@@ -62,21 +62,33 @@ class CutoutWoodbury:
         self.base = factorize_spd(sp.block_diag([k + sp.diags(a0 * m) for k, m in blocks], format="csr"))
         # S = I - V A_h^-1 V' = I - sum_l W_l G_l W_l', G_l the cut-out dofs' block of A_l^-1
         lus = [factorize_spd(k + sp.diags(a0 * m)) for k, m in blocks]
-        comp_type = (dofs % DOFS_PER_NODE == 2).astype(int)  # in-plane components go as psi1, the x3 one as psi3
-        psi, k = self.series.psi, self.series.k
-        Y = []
-        for i, (lu, Ei) in enumerate(zip(lus, E)):
-            lam, Q = np.linalg.eigh(Ei @ lu.solve(Ei.T.toarray()))  # G_l, semidefinite where a mode lacks a dof
-            root = Q * np.sqrt(np.clip(lam, 0.0, None))  # G_l = root root'
-            unit_u, unit_w = psi[comp_type, i].T, k[i] * psi[1 - comp_type, i].T  # (nq, dofs): U and W of unit amplitudes
-            W = (np.einsum("qdr,qd->qrd", F[:, :n_dof], unit_u, optimize=True)
-                 + np.einsum("qdr,qd->qrd", F[:, n_dof:], unit_w, optimize=True)).reshape(-1, n_dof)
-            Y.append(W @ root)
-        Y = np.hstack(Y)
-        # I - Y Y' in the lower triangle, one symmetric rank-k update
-        capacitance = la.blas.dsyrk(-1.0, Y, beta=1.0, c=np.eye(len(Y)), lower=1)
+        G = np.stack([Ei @ lu.solve(Ei.T.toarray()) for lu, Ei in zip(lus, E)])  # (modes, dofs, dofs)
+        capacitance = np.eye(len(x3) * F.shape[2]) - self._correction(F, G, dofs)
         self.chol = la.cho_factor(capacitance, lower=True, check_finite=False, overwrite_a=True)
-        self.rank = len(Y)
+        self.rank = len(capacitance)
+
+    def _correction(self, F: np.ndarray, G: np.ndarray, dofs: np.ndarray) -> np.ndarray:
+        """``V A_h^-1 V' = sum_l W_l G_l W_l'`` (rank, rank), summed over the modes first: with
+        ``Z_l`` the series (U and W) of unit amplitudes at the points, the kernel
+        ``K[(q, a, d), (p, b, e)] = sum_l Z_l[q, a, d] G_l[d, e] Z_l[p, b, e]`` is one matrix
+        product per cut-out dof, and ``F' K F`` one per point: ``(2 q n)^2`` modes flops and
+        ``q^2 (2 n)^2 rank``, against ``rank^2`` times the coupled amplitudes of forming each
+        mode's ``W_l G_l W_l'`` (moving_load_notched, quad9, 480 harmonics: 47 points, 66 dofs,
+        rank 6204 over 31680 amplitudes: the capacitance 25 -> 2.8 CPU s, the set-up 34 -> 7.3 s)."""
+        nq, two_n, rank = F.shape
+        n = two_n // 2
+        comp_type = (dofs % DOFS_PER_NODE == 2).astype(int)  # in-plane components go as psi1, the x3 one as psi3
+        psi, k = self.series.psi, self.series.k  # (2, modes, nq), (modes,)
+        Z = np.stack([psi[comp_type], k[None, :, None] * psi[1 - comp_type]], axis=2)  # (dofs, modes, U/W, nq)
+        Z = np.ascontiguousarray(Z.transpose(1, 3, 2, 0))  # (modes, nq, U/W, dofs): F's rows per point
+        flat = Z.reshape(len(G), -1)
+        kernel = np.empty((nq, 2, n, nq * two_n))
+        for d in range(n):
+            kernel[:, :, d] = (Z[:, :, :, d].reshape(len(G), -1).T
+                               @ (G[:, d, None, None, :] * Z).reshape(flat.shape)).reshape(nq, 2, -1)
+        kernel = kernel.reshape(nq, two_n, nq, two_n)
+        right = np.einsum("qipj,pjs->qips", kernel, F, optimize=True)  # K F
+        return np.einsum("qir,qips->qrps", F, right, optimize=True).reshape(nq * rank, nq * rank)
 
     @staticmethod
     def _energies(model, a0, dofs, excess):
