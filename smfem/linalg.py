@@ -55,7 +55,7 @@ def factorize_spd(A: sp.spmatrix):
     bandwidth = int(np.abs(coo.row - coo.col).max(initial=0))
     band = A.shape[0] * (bandwidth + 1)
     lu = sparse_lu(A)
-    if band > MAX_BAND_ENTRIES or band > 1.5 * (lu.L.nnz + lu.U.nnz):
+    if band > MAX_BAND_ENTRIES or band > 1.5 * lu.nnz:
         return lu
     try:
         return BandedCholesky(coo, perm, bandwidth)

@@ -27,6 +27,8 @@ import scipy.sparse.linalg as sla
 
 from cases.timeint import ALPHA, DELTA
 
+from .linalg import factorize_spd
+
 
 class StepFailed(RuntimeError):
     """A time step that could not be solved; the steps before it stand."""
@@ -134,9 +136,10 @@ class LinearSystem:
         self.factorizations = 1
 
     def factorize(self, dt: float):
-        """The factorization of the step's matrix ``K + a0 M``."""
+        """The factorization of the step's matrix ``K + a0 M`` (symmetric positive definite:
+        :func:`smfem.linalg.factorize_spd`)."""
         self.a0M = Constants.of(dt).a0 * self.M
-        return sla.splu((self.K + self.mass_matrix(self.a0M)).tocsc())
+        return factorize_spd(self.K + self.mass_matrix(self.a0M))
 
     def mass_matrix(self, scaled_mass) -> sp.spmatrix:
         """``scaled_mass`` (a multiple of ``M``, diagonal or sparse as ``M`` is) as a sparse matrix."""
