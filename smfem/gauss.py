@@ -58,7 +58,7 @@ class GaussSystem(LinearSystem):
         is (:func:`smfem.linalg.sparse_lu`): less than half the fill of SuperLU's default column
         ordering on the flywheel's 9-node harmonics (benchmarks/README.md)."""
         self.mass_solve = MassSolve(self.M)
-        return sparse_lu(self.K + self.mass_matrix((MU * MU / (dt * dt)) * self.M))
+        return self.step_factors((MU * MU / (dt * dt)) * self.M, sparse_lu)
 
     def acceleration(self, t: float, u: np.ndarray) -> np.ndarray:
         """``M^-1 (f(t) - K u)``."""

@@ -1,7 +1,8 @@
 """Run a case with SMFEM: build the model, choose the system, march in time, record probes.
 
 The solver chooses how to solve each step and names the choice in ``info['solve']``:
-* elastic, homogeneous along x3: decoupled harmonics, one block-diagonal factorization;
+* elastic, homogeneous along x3: decoupled harmonics, marched in batches that fit memory, each
+  harmonic factorized apart (:mod:`smfem.batched`);
 * elastic, material varying along x3: a direct solve of the whole coupled block system if it
   has at most ``options.direct_max_nonzeros`` nonzeros, else the iterations below;
 * elasto-plastic: the iterations (13)-(16) of additional loads with Wilkins' correction
@@ -20,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from functools import partial
 
 import numpy as np
 import scipy.sparse as sp
@@ -27,7 +29,7 @@ import scipy.sparse as sp
 from cases.recorder import StepRecorder
 from cases.result import RunResult
 
-from . import gauss, laws, woodbury
+from . import batched, gauss, laws, woodbury
 from .contact import ContactSystem
 from .exact import error_l2
 from .fields import field_mesh
@@ -89,6 +91,8 @@ def solve(case, options: SolverOptions | None = None, progress=None, with_fields
     """
     cpu0 = time.process_time()
     options = options or SolverOptions()
+    if batched.decoupled(case, options):  # independent harmonics: marched in batches that fit memory
+        return batched.solve(case, options, partial(decoupled_system, case), progress, with_fields, every, cpu0)
     model, system, how = build_system(case, options)
     return _run(case, model, system, how, progress, with_fields, cpu0, every)
 
@@ -152,6 +156,14 @@ def gauss_system(case, options: SolverOptions, plastic: bool):
     how = "the 2-stage Gauss-Legendre method, " + ("the coupled block system" if model.coupling else
                                                    "decoupled harmonics") + ", one complex factorization"
     return model, GaussSystem(K, M, Q, case.dt, force_terms(case, model)), how
+
+
+def decoupled_system(case, model: Model) -> LinearSystem:
+    """The linear system of ``model``'s decoupled harmonics, each factorized apart: Newmark's,
+    or with ``time_scheme=gauss`` Gauss's (a batch of :func:`smfem.batched.solve`)."""
+    K, M, Q, _, offsets = stacked(model)
+    kind = GaussSystem if case.params.get("time_scheme", "newmark") == "gauss" else LinearSystem
+    return kind(K, M, Q, case.dt, force_terms(case, model), blocks=offsets)
 
 
 def _field(model, system, state):
