@@ -28,6 +28,7 @@ import pstats
 import subprocess
 import sys
 import time
+from functools import partial
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
@@ -147,6 +148,20 @@ FORM_RUNS = (("moving_load_notched", {"plastic": False, "harmonics": 240}),
 TINY_FORMS = (("notched_strip", {"plastic": False, "harmonics": 40, "t_end": 3.2e-5}),)
 
 
+#: CPU seconds a forced form may run before it is stopped (its CPU to there and the share of the
+#: steps it made are printed)
+FORM_BUDGET_S = 120.0
+
+
+class OverBudget(Exception):
+    """A forced form's run past :data:`FORM_BUDGET_S`: (step, steps)."""
+
+
+def _budget(t0: float, step: int, n_steps: int) -> None:
+    if time.process_time() - t0 > FORM_BUDGET_S:
+        raise OverBudget(step, n_steps)
+
+
 def forms(runs) -> None:
     """Each form of the coupled solve forced in turn on elastic runs, against the prediction."""
     from smfem import coupled_solve
@@ -160,15 +175,24 @@ def forms(runs) -> None:
             case = get_case(name, sets)
             chosen, costs = chooser(Model(case), case.n_steps, 10**12)
             for form in ("whole", "woodbury", "krylov"):
+                if form in costs and chosen in costs and costs[form].total(case.n_steps) > 20 * costs[chosen].total(case.n_steps):
+                    print(f"| {name} | {' '.join(f'{k}={v}' for k, v in sets.items())} | {form} | not run: predicted "
+                          f"{costs[form].total(case.n_steps) / costs[chosen].total(case.n_steps):.0f} times the chosen | | |")
+                    continue
                 coupled_solve.choose = lambda model, solves, nnz, form=form: (form, {})
-                cpu = []
+                cpu, stopped = [], ""
                 for _ in range(2):
                     t0 = time.process_time()
-                    solve(case, with_fields=False)
+                    try:
+                        solve(case, progress=partial(_budget, t0), with_fields=False)
+                    except OverBudget as exc:
+                        stopped = f" (stopped at step {exc.args[0]} of {exc.args[1]}: {exc.args[1] / exc.args[0]:.0f} times that)"
+                        cpu.append(time.process_time() - t0)
+                        break
                     cpu.append(time.process_time() - t0)
                 flops = f"{costs[form].total(case.n_steps) / 1e9:.1f}" if form in costs else "-"
-                print(f"| {name} | {' '.join(f'{k}={v}' for k, v in sets.items())} | {form} | {min(cpu):.2f} | {flops} "
-                      f"| {'yes' if form == chosen else ''} |", flush=True)
+                print(f"| {name} | {' '.join(f'{k}={v}' for k, v in sets.items())} | {form} | {min(cpu):.2f}{stopped} "
+                      f"| {flops} | {'yes' if form == chosen else ''} |", flush=True)
     finally:
         coupled_solve.choose = chooser
 

@@ -24,8 +24,8 @@ import math
 from typing import Iterator
 
 import numpy as np
-import scipy.sparse.linalg as sla
 
+from .linalg import sparse_lu
 from .newmark import LinearSystem, MassSolve, State
 
 ROOT3 = math.sqrt(3.0)
@@ -51,9 +51,14 @@ class GaussSystem(LinearSystem):
     parameters it takes) stepped by :func:`march`: one factorization of ``K + mu^2 / dt^2 M``."""
 
     def factorize(self, dt: float):
-        """The complex stage matrix's factorization (and the coupled mass's, for accelerations)."""
+        """The complex stage matrix's factorization (and the coupled mass's, for accelerations).
+
+        The matrix is complex symmetric with a positive definite real part (``Re mu^2 > 0``),
+        so it is factorized in a symmetric ordering with diagonal pivots, as a real stiffness
+        is (:func:`smfem.linalg.sparse_lu`): less than half the fill of SuperLU's default column
+        ordering on the flywheel's 9-node harmonics (benchmarks/README.md)."""
         self.mass_solve = MassSolve(self.M)
-        return sla.splu((self.K + self.mass_matrix((MU * MU / (dt * dt)) * self.M)).astype(complex).tocsc())
+        return self.step_factors((MU * MU / (dt * dt)) * self.M, sparse_lu)
 
     def acceleration(self, t: float, u: np.ndarray) -> np.ndarray:
         """``M^-1 (f(t) - K u)``."""

@@ -59,6 +59,12 @@ def cut_edges(case, lo: float, hi: float) -> np.ndarray:
     return np.array(sorted(x for x in cuts if lo <= x <= hi))
 
 
+def varies(case) -> bool:
+    """Whether the material varies along x3 (a cut-out of ``contrast`` below 1, or a smooth
+    variation): then its harmonics couple; else they are independent."""
+    return (bool(case.cutouts) and case.contrast < 1.0) or bool(case.variation)
+
+
 def x3_quadrature(case, harmonics: int) -> tuple[np.ndarray, np.ndarray]:
     """Points and weights over the whole x3 range: Gauss-Legendre on each piece between cut-out
     edges, exact for the product of two harmonics < ``harmonics``."""

@@ -55,7 +55,7 @@ def factorize_spd(A: sp.spmatrix):
     bandwidth = int(np.abs(coo.row - coo.col).max(initial=0))
     band = A.shape[0] * (bandwidth + 1)
     lu = sparse_lu(A)
-    if band > MAX_BAND_ENTRIES or band > 1.5 * (lu.L.nnz + lu.U.nnz):
+    if band > MAX_BAND_ENTRIES or band > 1.5 * lu.nnz:
         return lu
     try:
         return BandedCholesky(coo, perm, bandwidth)
@@ -71,3 +71,36 @@ def sparse_lu(A: sp.spmatrix, symmetric: bool = True):
         return sla.splu(sp.csc_matrix(A))
     return sla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                     options=dict(SymmetricMode=True))
+
+
+
+class BlockFactors:
+    """Factors of a block-diagonal matrix, one per diagonal block, ``solve(b)`` block by block:
+    a block's factorization takes its own unknowns' memory and fill only, never a copy of the
+    whole matrix; ``nbytes``, what the factors hold.
+
+    Parameters
+    ----------
+    offsets : (n_blocks + 1,) the blocks' first rows, then the size
+    block : ``block(a, b)``, the diagonal block of rows and columns ``a:b`` (sparse), made
+        when it is factorized
+    factorize : ``factorize(A)``, a factorization with ``solve``
+    """
+
+    def __init__(self, offsets: np.ndarray, block, factorize):
+        self.offsets, self.factors, self.nbytes = np.asarray(offsets), [], 0
+        for a, b in zip(self.offsets[:-1], self.offsets[1:]):
+            A = block(a, b)
+            self.factors.append(factorize(A))
+            self.nbytes += factor_bytes(self.factors[-1], A.dtype.itemsize)
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        return np.concatenate([f.solve(b[a:c]) for f, a, c in zip(self.factors, self.offsets[:-1], self.offsets[1:])])
+
+
+def factor_bytes(factor, itemsize: int = 8) -> int:
+    """Bytes a factorization of a matrix of ``itemsize``-byte entries holds: a SuperLU's
+    nonzeros with their row indices, a banded Cholesky's band."""
+    if isinstance(factor, BandedCholesky):
+        return factor.factor.nbytes
+    return factor.nnz * (itemsize + 4)

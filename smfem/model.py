@@ -10,6 +10,8 @@ coupling, and ``coupling`` holds the off-diagonal blocks.
 
 from __future__ import annotations
 
+import copy
+import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -33,7 +35,8 @@ class ModelError(UnsupportedCase):
 
 @dataclass
 class ModeSystem:
-    """One mode: map ``T`` (full <- reduced), diagonal block ``K``, lumped ``M`` diagonal, load
+    """One mode: map ``T`` (full <- reduced), diagonal block ``K`` (None where the model keeps
+    no stiffness, :class:`Model`), lumped ``M`` diagonal, load
     ``Q`` and initial velocity ``V0`` (reduced); ``Q_terms``: the nodal vector of each of the
     model's timed loads (reduced), which that load's factor for this mode scales."""
 
@@ -56,13 +59,17 @@ class Model:
     element : the section element, a name in :data:`smfem.elements.ELEMENTS`
     bbar : the element's volumetric strain replaced by its projection per element (B-bar,
         :mod:`smfem.bbar`)
+    stiffness : keep every mode's reduced stiffness in :attr:`systems` (False: their ``K`` is
+        None, assembled for a batch of modes by :meth:`restricted`; a decoupled run marched in
+        batches holds one batch's stiffness at a time, :mod:`smfem.batched`)
 
     The off-diagonal stiffness blocks are assembled only on request
     (:meth:`coupled_stiffness`): a direct solve needs them, the block-iterative solver
     takes the coupling from the stresses instead.
     """
 
-    def __init__(self, case, nonlinear: bool = False, element: str | None = None, bbar: bool = False):
+    def __init__(self, case, nonlinear: bool = False, element: str | None = None, bbar: bool = False,
+                 stiffness: bool = True):
         self.case = case
         self.body = case.body
         self.length = case.length
@@ -89,7 +96,7 @@ class Model:
         self.ops: elements.Operators = self.element.operators(self.mesh.element_x(), case.body, nu)
         if bbar:
             self.ops = projected.operators(self.element, self.ops)
-        self.inhomogeneous = (bool(case.cutouts) and case.contrast < 1.0) or bool(case.variation)
+        self.inhomogeneous = inhomogeneity.varies(case)
         n_harm = case.harmonics
         families = ("c", "s") if case.body == RING else ("p",)
         candidates = fourier.modes(case.body, n_harm, families)
@@ -148,7 +155,7 @@ class Model:
         self.systems: list[ModeSystem] = []
         self._maps = [constraints.mode_map(case, self.mesh, mode, fixed) for mode in self.modes]
         for i, (mode, T) in enumerate(zip(self.modes, self._maps)):
-            K, M = self.reduced_blocks(i)
+            K, M = (self.reduced_stiffness(i) if stiffness else None), self.reduced_mass(i)
             self.systems.append(ModeSystem(mode, T, K, M, T.T @ Q[mode], self._project(T, V[mode]),
                                            tuple(T.T @ term.shapes[mode] for term in self.timed)))
         self.offsets = np.cumsum([0] + [s.T.shape[1] for s in self.systems])
@@ -325,9 +332,35 @@ class Model:
     def reduced_blocks(self, i: int, homogeneous: bool = False) -> tuple[sp.csr_matrix, np.ndarray]:
         """Mode ``i``'s reduced stiffness and lumped mass diagonal; ``homogeneous``: of the body
         without its cut-outs (f = 1)."""
+        return self.reduced_stiffness(i, homogeneous), self.reduced_mass(i, homogeneous)
+
+    def reduced_stiffness(self, i: int, homogeneous: bool = False) -> sp.csr_matrix:
+        """Mode ``i``'s reduced stiffness (:meth:`reduced_blocks`)."""
         T = self._maps[i]
-        K = (T.T @ self.full_stiffness(i, homogeneous) @ T).tocsr()
-        return K, T.multiply(T).T @ self.full_mass(i, i, homogeneous)  # T'diag(m)T: T's columns do not overlap
+        return (T.T @ self.full_stiffness(i, homogeneous) @ T).tocsr()
+
+    def reduced_mass(self, i: int, homogeneous: bool = False) -> np.ndarray:
+        """Mode ``i``'s reduced lumped mass diagonal (:meth:`reduced_blocks`)."""
+        T = self._maps[i]
+        return T.multiply(T).T @ self.full_mass(i, i, homogeneous)  # T'diag(m)T: T's columns do not overlap
+
+    def restricted(self, indices, stiffness: bool = True) -> "Model":
+        """The model of the decoupled modes ``indices`` (of :attr:`systems`) alone: a shallow copy
+        whose systems, modes and offsets are theirs; ``stiffness``: each with its stiffness
+        (assembled here where this model keeps none), else as this model keeps them. Probes,
+        loads and fields read it as a model of its own: a batch of harmonics marched apart
+        (:mod:`smfem.batched`)."""
+        if self.coupling:
+            raise ValueError("coupled modes cannot be taken apart")
+        part = copy.copy(self)
+        part._maps = [self._maps[i] for i in indices]
+        part.modes = [self.modes[i] for i in indices]
+        part.systems = [self.systems[i] if self.systems[i].K is not None or not stiffness else
+                        dataclasses.replace(self.systems[i], K=self.reduced_stiffness(i)) for i in indices]
+        part.offsets = np.cumsum([0] + [s.T.shape[1] for s in part.systems])
+        part.coupled_mass = part._coupled_mass()
+        part.__dict__.pop("homogeneous_blocks", None)  # a cached property of all modes
+        return part
 
     @property
     def n_dof(self) -> int:

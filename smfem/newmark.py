@@ -28,6 +28,8 @@ import scipy.sparse.linalg as sla
 
 from cases.timeint import ALPHA, DELTA
 
+from .linalg import BlockFactors, factorize_spd
+
 
 class StepFailed(RuntimeError):
     """A time step that could not be solved; the steps before it stand."""
@@ -125,19 +127,29 @@ class LinearSystem:
     Q : (n,) load held from t = 0
     dt : time step, s
     terms : callables ``t -> Q_k(t)`` added to ``Q`` (loads varying in time, :class:`Load`)
+    blocks : (n_blocks + 1,) offsets of the diagonal blocks of a block-diagonal ``K`` with a
+        lumped ``M`` (decoupled harmonics), each factorized apart; None: the matrix whole
     """
 
-    def __init__(self, K: sp.spmatrix, M, Q: np.ndarray, dt: float, terms=()):
-        self.K, self.load = K.tocsr(), Load(Q, terms)
+    def __init__(self, K: sp.spmatrix, M, Q: np.ndarray, dt: float, terms=(), blocks: np.ndarray | None = None):
+        self.K, self.load, self.blocks = K.tocsr(), Load(Q, terms), blocks
         self.diagonal_mass = isinstance(M, np.ndarray) and M.ndim == 1
         self.M = M if self.diagonal_mass else sp.csr_matrix(M)
         self.lu = self.factorize(dt)
         self.factorizations = 1
 
     def factorize(self, dt: float):
-        """The factorization of the step's matrix ``K + a0 M``."""
+        """The factorization of the step's matrix ``K + a0 M`` (symmetric positive definite:
+        :func:`smfem.linalg.factorize_spd`)."""
         self.a0M = Constants.of(dt).a0 * self.M
-        return sla.splu((self.K + self.mass_matrix(self.a0M)).tocsc())
+        return self.step_factors(self.a0M, factorize_spd)
+
+    def step_factors(self, scaled_mass, factorize):
+        """``factorize(K + scaled_mass)`` (``scaled_mass`` a multiple of ``M``), or with ``blocks``
+        each diagonal block's (:class:`smfem.linalg.BlockFactors`)."""
+        if self.blocks is None:
+            return factorize(self.K + self.mass_matrix(scaled_mass))
+        return BlockFactors(self.blocks, lambda a, b: self.K[a:b, a:b] + sp.diags(scaled_mass[a:b]), factorize)
 
     def mass_matrix(self, scaled_mass) -> sp.spmatrix:
         """``scaled_mass`` (a multiple of ``M``, diagonal or sparse as ``M`` is) as a sparse matrix."""

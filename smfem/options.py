@@ -30,6 +30,8 @@ SPECS = {
     "layer_points_per_harmonic": Spec(int, 1, 1000, help="contact-layer points per harmonic"),
     "max_state_iterations": Spec(int, 1, 100_000, help="contact-layer state iterations allowed per step"),
     "bbar": Spec(bool, help="the section element's volumetric strain projected per element (B-bar)"),
+    "batch_memory_mb": Spec(float, 0.0, 1e7, open_lo=True,
+                            help="memory a batch of decoupled harmonics may take, MB (predicted)"),
 }
 
 
@@ -69,6 +71,11 @@ class SolverOptions:
         per element (B-bar, :mod:`smfem.bbar`: the element mean on the moment-scheme
         quadrilateral, ``{1, xi, eta}`` on the 9-node one), in the stiffness and at the stress
         sample points alike; against volumetric locking in plastic flow
+    batch_memory_mb : the memory a batch of decoupled harmonics may take, MB, as predicted
+        before it is built (:mod:`smfem.batched`: a linear run whose harmonics do not couple
+        marches them in batches); never more than half the memory the machine has available;
+        a batch takes one harmonic at least. Larger batches march no faster (measured in
+        benchmarks/README.md), so the default keeps them small
     """
 
     iteration_matrix: str = "auto"
@@ -81,6 +88,7 @@ class SolverOptions:
     layer_points_per_harmonic: int = 8
     max_state_iterations: int = 60
     bbar: bool = False
+    batch_memory_mb: float = 16.0
 
     def __post_init__(self):
         """Every field checked by its :data:`SPECS` (a :class:`cases.ParameterError`, one line)

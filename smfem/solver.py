@@ -8,20 +8,21 @@ take the 2-stage Gauss-Legendre method instead (``time_scheme=gauss``, :mod:`smf
 from __future__ import annotations
 
 import time
+from functools import partial
 
 import numpy as np
 
 from cases.recorder import StepRecorder
 from cases.result import RunResult
 
-from . import gauss
+from . import batched, gauss
 from .exact import error_l2
 from .fields import field_mesh
 from .gauss import GaussSystem
 from .newmark import StepFailed, march
 from .options import SolverOptions
 from .stacking import stacked
-from .strategy import build_system
+from .strategy import Batched, Run, build_system, choose
 from .probes import CaseProbes
 from .zones import smfem_snapshot
 
@@ -40,6 +41,8 @@ def solve(case, options: SolverOptions | None = None, progress=None, with_fields
     """
     cpu0 = time.process_time()
     options = options or SolverOptions()
+    if choose(Run(case, options)) is Batched:  # independent harmonics: marched in batches that fit memory
+        return batched.solve(case, options, partial(Batched.system, case), progress, with_fields, every, cpu0)
     model, system, how = build_system(case, options)
     return _run(case, model, system, how, progress, with_fields, cpu0, every)
 

@@ -4,6 +4,9 @@ Each row is a small class: a condition on the run (:meth:`applies`), a factory o
 the system that marches it (:meth:`build`), and the description that names it in
 ``info['solve']``. The first row whose condition holds is taken (:func:`build_system`):
 
+* elastic, harmonics independent by the case (no contact, the material the same all along x3):
+  marched a batch of harmonics at a time, each harmonic factorized apart (:mod:`smfem.batched`;
+  :func:`smfem.solver.solve` runs it, :func:`build_system` gives its system of all harmonics);
 * ``time_scheme=gauss``: the 2-stage Gauss-Legendre method, the linear system factorized whole;
 * a wall or bodies in contact: the contact layer (:mod:`smfem.contact`);
 * elastic, modes that do not couple: one block-diagonal factorization;
@@ -21,7 +24,7 @@ from functools import cached_property
 
 import numpy as np
 
-from . import coupled_solve, laws
+from . import batched, coupled_solve, laws
 from .contact import ContactSystem
 from .coupling import StackedOperator
 from .gauss import GaussSystem
@@ -72,6 +75,29 @@ class Run:
     @property
     def a0(self) -> float:
         return Constants.of(self.case.dt).a0
+
+
+class Batched:
+    """Elastic, the harmonics independent by the case: each factorized apart, marched in batches
+    that fit memory."""
+
+    @staticmethod
+    def applies(run: Run) -> bool:
+        return batched.decoupled(run.case, run.options)
+
+    @staticmethod
+    def system(case, model: Model) -> LinearSystem:
+        """The linear system of ``model``'s harmonics (a batch's), each factorized apart:
+        Newmark's, or with ``time_scheme=gauss`` Gauss's."""
+        K, M, Q, _, offsets = stacked(model)
+        kind = GaussSystem if case.params.get("time_scheme", "newmark") == "gauss" else LinearSystem
+        return kind(K, M, Q, case.dt, force_terms(case, model), blocks=offsets)
+
+    @classmethod
+    def build(cls, run: Run):
+        model = run.linear_model
+        scheme = "the 2-stage Gauss-Legendre method" if run.scheme == "gauss" else "Newmark"
+        return model, cls.system(run.case, model), f"decoupled harmonics, each factorized apart ({scheme})"
 
 
 class GaussScheme:
@@ -201,14 +227,18 @@ class Iterations:
 
 
 #: the strategies, in the order they are tried
-STRATEGIES = (GaussScheme, ContactLayer, Decoupled, CoupledElastic, Iterations)
+STRATEGIES = (Batched, GaussScheme, ContactLayer, Decoupled, CoupledElastic, Iterations)
+
+
+def choose(run: Run):
+    """The first strategy that applies to ``run``."""
+    return next(s for s in STRATEGIES if s.applies(run))
 
 
 def build_system(case, options: SolverOptions):
     """The model, the system that solves its steps, and the ``info['solve']`` that names it."""
     run = Run(case, options)
-    strategy = next(s for s in STRATEGIES if s.applies(run))
-    return strategy.build(run)
+    return choose(run).build(run)
 
 
 def _cheaper_direct(model, solves: int) -> str:

@@ -43,7 +43,8 @@ def test_thick_cylinder_computes_only_loaded_harmonics():
     l = 0 and l = 2 mod 4 only; every other harmonic is left out."""
     result = solve(get_case("thick_cylinder"), with_fields=False)
     assert result.info["harmonics_used"] == ["0c", "2c", "6c", "10c", "14c", "18c"]
-    assert result.info["factorizations"] == 1
+    # one per harmonic, and one of the largest that predicts a batch's memory (smfem/batched.py)
+    assert result.info["factorizations"] == len(result.info["harmonics_used"]) + 1
     A = result.history["A_ur"]
     assert np.all(np.isfinite(A)) and A.min() < 0  # the loaded point moves inwards
     # the static radial displacement under the patch is of order q r / E; the dynamic one twice it
