@@ -18,7 +18,8 @@ from cases import get_case, parse_sets
 from smfem.model import Model
 from smfem.newmark import LinearSystem, march
 from smfem.probes import ProbeSet
-from smfem.solver import solve, stacked
+from smfem.solver import solve
+from smfem.stacking import stacked
 
 
 def best_of(fn, repeat=5):

@@ -30,7 +30,6 @@ of them, by its unknowns).
 
 from __future__ import annotations
 
-import os
 import time
 
 import numpy as np
@@ -41,6 +40,7 @@ from cases.result import RunResult
 from . import gauss, inhomogeneity, laws, newmark
 from .exact import error_l2
 from .fields import field_mesh
+from .linalg import available_bytes
 from .model import Model
 from .options import SolverOptions
 from .probes import CaseProbes
@@ -57,20 +57,6 @@ def decoupled(case, options: SolverOptions) -> bool:
     ``iteration_matrix`` is refused by :func:`smfem.solver.build_system`)."""
     return (not laws.get(case.material).nonlinear and case.wall is None and not case.contacts
             and not inhomogeneity.varies(case) and options.iteration_matrix in ("auto", "coupled"))
-
-
-def available_bytes() -> int:
-    """The memory the machine has available now, bytes: ``MemAvailable`` of /proc/meminfo
-    (Linux: free memory plus the caches it can drop), else the free pages ``os.sysconf``
-    reports."""
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
 
 
 def shares(model: Model, make_system) -> np.ndarray:

@@ -23,7 +23,6 @@ fits in memory (benchmarks/coupled_profile.py measures the prediction against th
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,7 +31,7 @@ import scipy.sparse.linalg as sla
 
 from . import woodbury
 from .coupling import StackedOperator, cutout_points
-from .linalg import factorize_spd
+from .linalg import available_bytes, factorize_spd
 
 #: the share of the memory available at the start that a factorization may take
 MEMORY_SHARE = 0.6
@@ -119,18 +118,6 @@ def predicted_costs(model) -> dict[str, Cost]:
     return {"whole": whole, "woodbury": low_rank}
 
 
-def available_memory() -> float:
-    """Bytes of memory available now (``MemAvailable``), else the machine's physical memory."""
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024
-    except OSError:
-        pass
-    return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
-
-
 def choose(model, solves: int, max_nonzeros: int, memory: float | None = None) -> tuple[str, dict[str, Cost]]:
     """The form to solve ``model``'s coupled ``A`` with over ``solves`` solves: ``'block-diagonal'``
     where the modes do not couple, else the direct form of least predicted cost that fits in
@@ -139,7 +126,7 @@ def choose(model, solves: int, max_nonzeros: int, memory: float | None = None) -
     if not model.coupling:
         return BlockDiagonal.name, {}
     costs = predicted_costs(model)
-    budget = MEMORY_SHARE * (available_memory() if memory is None else memory)
+    budget = MEMORY_SHARE * (available_bytes() if memory is None else memory)
     fits = {name: c for name, c in costs.items() if c.memory <= budget
             and (name != "whole" or model.coupled_nonzeros() <= max_nonzeros)}
     if not fits:

@@ -10,6 +10,8 @@ minimum-degree ordering is faster.
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import scipy.linalg as la
 from scipy.linalg.lapack import dpbtrs
@@ -104,3 +106,17 @@ def factor_bytes(factor, itemsize: int = 8) -> int:
     if isinstance(factor, BandedCholesky):
         return factor.factor.nbytes
     return factor.nnz * (itemsize + 4)
+
+
+def available_bytes() -> int:
+    """The memory the machine has available now, bytes: ``MemAvailable`` of /proc/meminfo
+    (Linux: free memory plus the caches it can drop), else the free pages ``os.sysconf``
+    reports."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")

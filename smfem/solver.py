@@ -21,7 +21,6 @@ from .fields import field_mesh
 from .gauss import GaussSystem
 from .newmark import StepFailed, march
 from .options import SolverOptions
-from .stacking import stacked
 from .strategy import Batched, Run, build_system, choose
 from .probes import CaseProbes
 from .zones import smfem_snapshot
