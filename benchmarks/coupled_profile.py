@@ -37,7 +37,7 @@ import numpy as np  # noqa: E402
 import scipy.sparse as sp  # noqa: E402
 
 from cases import get_case  # noqa: E402
-from smfem.linalg import factorize_spd  # noqa: E402
+from smfem.linalg import factorize_spd, step_blocks  # noqa: E402
 from smfem.newmark import Constants  # noqa: E402
 from smfem.solver import solve  # noqa: E402
 
@@ -94,15 +94,11 @@ def split(case_name: str, sets: dict) -> tuple[dict, dict]:
 
 def bare_solve_seconds(case, options) -> float:
     """One solve with the step's block-diagonal factors, alone: the least of 30."""
-    from smfem.strategy import Run
+    from smfem.model import Model
 
-    model = Run(case, options).linear_model if not case.material.plastic else None
-    if model is None:
-        from smfem.model import Model
-        model = Model(case, nonlinear=True, bbar=options.bbar)
-    a0 = Constants.of(case.dt).a0
+    model = Model(case, nonlinear=case.material.plastic, bbar=options.bbar)  # the modes the run keeps
     blocks = model.homogeneous_blocks if model.coupling else [(s.K, s.M) for s in model.systems]
-    lu = factorize_spd(sp.block_diag([k + sp.diags(a0 * m) for k, m in blocks], format="csr"))
+    lu = factorize_spd(sp.block_diag(list(step_blocks(blocks, Constants.of(case.dt).a0)), format="csr"))
     b = np.random.default_rng(0).normal(size=model.n_dof)
     best = float("inf")
     for _ in range(30):

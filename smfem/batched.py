@@ -37,7 +37,7 @@ import numpy as np
 from cases.recorder import StepRecorder
 from cases.result import RunResult
 
-from . import gauss, inhomogeneity, laws, newmark
+from . import gauss, inhomogeneity, laws
 from .exact import error_l2
 from .fields import field_mesh
 from .linalg import available_bytes
@@ -54,7 +54,7 @@ STEP_VECTORS = 16
 def decoupled(case, options: SolverOptions) -> bool:
     """Whether the run's harmonics are independent: an elastic law, no wall and no contact, the
     material the same all along x3, and no iterations asked for (under Gauss another
-    ``iteration_matrix`` is refused by :func:`smfem.solver.build_system`)."""
+    ``iteration_matrix`` is refused by :func:`smfem.strategy.build_system`)."""
     return (not laws.get(case.material).nonlinear and case.wall is None and not case.contacts
             and not inhomogeneity.varies(case) and options.iteration_matrix in ("auto", "coupled"))
 
@@ -153,9 +153,8 @@ class Sums:
         rows = slice(offsets[group.start], offsets[group.stop])
         done, weight = offsets[group.start] / model.n_dof, (offsets[group.stop] - offsets[group.start]) / model.n_dof
         V0 = np.concatenate([s.V0 for s in part.systems])
-        gaussian = isinstance(system, gauss.GaussSystem)
-        self.scheme = "the 2-stage Gauss-Legendre method, " if gaussian else ""
-        for state in (gauss.march if gaussian else newmark.march)(system, np.zeros_like(V0), V0, case.dt, n_steps):
+        self.scheme = "the 2-stage Gauss-Legendre method, " if isinstance(system, gauss.GaussSystem) else ""
+        for state in gauss.march_for(system)(system, np.zeros_like(V0), V0, case.dt, n_steps):
             self.rows[state.n] += probes.values(state, system)
             self.iterations[state.n] = max(self.iterations[state.n], state.iterations)
             if state.n in self.frames:

@@ -31,7 +31,7 @@ import scipy.sparse.linalg as sla
 
 from . import woodbury
 from .coupling import StackedOperator, cutout_points
-from .linalg import available_bytes, factorize_spd
+from .linalg import BlockFactors, available_bytes, factorize_spd, step_blocks
 
 #: the share of the memory available at the start that a factorization may take
 MEMORY_SHARE = 0.6
@@ -43,7 +43,7 @@ class BlockDiagonal:
     name = "block-diagonal"
 
     def __init__(self, model, a0: float):
-        self.lu = factorize_spd(sp.block_diag([s.K + sp.diags(a0 * s.M) for s in model.systems], format="csr"))
+        self.lu = factorize_spd(sp.block_diag(list(step_blocks(((s.K, s.M) for s in model.systems), a0)), format="csr"))
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self.lu.solve(b)
@@ -55,7 +55,7 @@ class Whole:
     name = "whole"
 
     def __init__(self, model, a0: float):
-        blocks = sp.block_diag([s.K + sp.diags(a0 * s.M) for s in model.systems], format="csr")
+        blocks = sp.block_diag(list(step_blocks(((s.K, s.M) for s in model.systems), a0)), format="csr")
         self.lu = factorize_spd(blocks + model.coupled_stiffness() + a0 * model.coupled_mass)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
@@ -74,11 +74,10 @@ class Krylov:
 
     def __init__(self, model, a0: float, rtol: float, maxiter: int, op: StackedOperator | None = None):
         op = op or StackedOperator(model)
-        n, o = model.n_dof, model.offsets
-        self.lus = [factorize_spd(s.K + sp.diags(a0 * s.M)) for s in model.systems]
+        n = model.n_dof
+        self.diagonal = BlockFactors(step_blocks(((s.K, s.M) for s in model.systems), a0))
         self.A = sla.LinearOperator((n, n), matvec=lambda v: op.K(v) + a0 * op.M(v), dtype=float)
-        self.blocks = sla.LinearOperator((n, n), dtype=float, matvec=lambda r: np.concatenate(
-            [lu.solve(r[o[i]:o[i + 1]]) for i, lu in enumerate(self.lus)]))
+        self.blocks = sla.LinearOperator((n, n), matvec=self.diagonal.solve, dtype=float)
         self.rtol, self.maxiter, self.iterations, self.last = rtol, maxiter, 0, np.zeros(n)
 
     def solve(self, b: np.ndarray, start: np.ndarray | None = None) -> np.ndarray:

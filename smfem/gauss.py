@@ -27,6 +27,7 @@ import numpy as np
 
 from .linalg import sparse_lu
 from .newmark import LinearSystem, MassSolve, State
+from .newmark import march as newmark_march
 
 ROOT3 = math.sqrt(3.0)
 #: the stages' times within a step, in steps
@@ -84,3 +85,8 @@ def march(system: GaussSystem, u0: np.ndarray, v0: np.ndarray, dt: float, n_step
     for n in range(1, n_steps + 1):
         u, v = system.step(u, v, (n - 1) * dt, dt)
         yield State(n, u, v, system.acceleration(n * dt, u), 1)
+
+
+def march_for(system):
+    """How ``system`` marches: :func:`march` for a :class:`GaussSystem`, else Newmark's."""
+    return march if isinstance(system, GaussSystem) else newmark_march

@@ -33,7 +33,7 @@ from cases import x3_points
 
 from . import laws
 from .coupling import StackedOperator
-from .linalg import factorize_spd
+from .linalg import BlockFactors, step_blocks
 from .newmark import Constants, Load, MassSolve, StepFailed
 from .options import SolverOptions
 from .sampling import SamplePoints
@@ -84,8 +84,8 @@ class ConjugateGradients:
     exact = False
 
     def __init__(self, krylov):
-        self.krylov, self.factorizations = krylov, len(krylov.lus)
-        self.factors = krylov.lus  # one solve each per Krylov iteration
+        self.krylov, self.factorizations = krylov, len(krylov.diagonal.factors)
+        self.factors = krylov.diagonal.factors  # one solve each per Krylov iteration
 
     def correction(self, x: np.ndarray, step: Step, loads: np.ndarray) -> np.ndarray:
         return self.krylov.solve(step.residual(x, loads), start=np.zeros_like(x))
@@ -98,7 +98,7 @@ class BlockSOR:
     def __init__(self, model, a0: float, omega: float):
         S, o = model.systems, model.offsets
         self.omega, self.offsets = omega, o
-        self.lus = [factorize_spd(s.K + sp.diags(a0 * s.M)) for s in S]
+        self.lus = BlockFactors(step_blocks(((s.K, s.M) for s in S), a0)).factors
         K = sp.block_diag([s.K for s in S], format="csr") + (model.coupled_stiffness() if model.coupling else 0)
         M = model.mass_matrix()
         M = sp.csr_matrix(sp.diags(M) if isinstance(M, np.ndarray) else M)

@@ -75,26 +75,30 @@ def sparse_lu(A: sp.spmatrix, symmetric: bool = True):
                     options=dict(SymmetricMode=True))
 
 
+def step_blocks(pairs, a0: float):
+    """``K + a0 M`` of each mode's (stiffness, lumped mass diagonal) in ``pairs``, one by one."""
+    return (K + sp.diags(a0 * M) for K, M in pairs)
+
 
 class BlockFactors:
     """Factors of a block-diagonal matrix, one per diagonal block, ``solve(b)`` block by block:
     a block's factorization takes its own unknowns' memory and fill only, never a copy of the
-    whole matrix; ``nbytes``, what the factors hold.
+    whole matrix; ``factors``, each block's; ``nbytes``, what they hold.
 
     Parameters
     ----------
-    offsets : (n_blocks + 1,) the blocks' first rows, then the size
-    block : ``block(a, b)``, the diagonal block of rows and columns ``a:b`` (sparse), made
-        when it is factorized
+    blocks : the diagonal blocks (sparse, square), in order: an iterable, so that each can be
+        made when it is factorized
     factorize : ``factorize(A)``, a factorization with ``solve``
     """
 
-    def __init__(self, offsets: np.ndarray, block, factorize):
-        self.offsets, self.factors, self.nbytes = np.asarray(offsets), [], 0
-        for a, b in zip(self.offsets[:-1], self.offsets[1:]):
-            A = block(a, b)
+    def __init__(self, blocks, factorize=factorize_spd):
+        self.factors, self.nbytes, sizes = [], 0, [0]
+        for A in blocks:
             self.factors.append(factorize(A))
             self.nbytes += factor_bytes(self.factors[-1], A.dtype.itemsize)
+            sizes.append(A.shape[0])
+        self.offsets = np.cumsum(sizes)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return np.concatenate([f.solve(b[a:c]) for f, a, c in zip(self.factors, self.offsets[:-1], self.offsets[1:])])
@@ -114,9 +118,10 @@ def available_bytes() -> int:
     reports."""
     try:
         with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
+            lines = f.read().splitlines()
+    except OSError:  # not Linux
+        lines = []
+    for line in lines:
+        if line.startswith("MemAvailable:"):
+            return int(line.split()[1]) * 1024
     return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")

@@ -149,7 +149,8 @@ class LinearSystem:
         each diagonal block's (:class:`smfem.linalg.BlockFactors`)."""
         if self.blocks is None:
             return factorize(self.K + self.mass_matrix(scaled_mass))
-        return BlockFactors(self.blocks, lambda a, b: self.K[a:b, a:b] + sp.diags(scaled_mass[a:b]), factorize)
+        o = self.blocks
+        return BlockFactors((self.K[a:b, a:b] + sp.diags(scaled_mass[a:b]) for a, b in zip(o[:-1], o[1:])), factorize)
 
     def mass_matrix(self, scaled_mass) -> sp.spmatrix:
         """``scaled_mass`` (a multiple of ``M``, diagonal or sparse as ``M`` is) as a sparse matrix."""
@@ -188,7 +189,7 @@ class CoupledLinearSystem(LinearSystem):
 
     def __init__(self, op, solver, mass: sp.spmatrix, Q: np.ndarray, dt: float, terms=()):
         self.op, self.lu, self.M, self.load = op, solver, mass, Load(Q, terms)
-        self.a0, self.diagonal_mass, self.factorizations = Constants.of(dt).a0, False, 1
+        self.a0, self.factorizations = Constants.of(dt).a0, 1
 
     def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
         return MassSolve(self.M)(self.load(0.0) - self.op.K(u0))

@@ -18,10 +18,9 @@ from cases.result import RunResult
 from . import batched, gauss
 from .exact import error_l2
 from .fields import field_mesh
-from .gauss import GaussSystem
-from .newmark import StepFailed, march
+from .newmark import StepFailed
 from .options import SolverOptions
-from .strategy import Batched, Run, build_system, choose
+from .strategy import Batched, Run, choose
 from .probes import CaseProbes
 from .zones import smfem_snapshot
 
@@ -40,9 +39,11 @@ def solve(case, options: SolverOptions | None = None, progress=None, with_fields
     """
     cpu0 = time.process_time()
     options = options or SolverOptions()
-    if choose(Run(case, options)) is Batched:  # independent harmonics: marched in batches that fit memory
+    run = Run(case, options)  # one: its conditions build the model that its strategy then takes
+    strategy = choose(run)
+    if strategy is Batched:  # independent harmonics: marched in batches that fit memory
         return batched.solve(case, options, partial(Batched.system, case), progress, with_fields, every, cpu0)
-    model, system, how = build_system(case, options)
+    model, system, how = strategy.build(run)
     return _run(case, model, system, how, progress, with_fields, cpu0, every)
 
 
@@ -66,8 +67,7 @@ def _run(case, model, system, how, progress, with_fields, cpu0, every=0) -> RunR
                             snapshot=snapshot)
     V0 = np.concatenate([s.V0 for s in model.systems])
     try:
-        steps = gauss.march if isinstance(system, GaussSystem) else march
-        for state in steps(system, np.zeros_like(V0), V0, case.dt, case.n_steps):
+        for state in gauss.march_for(system)(system, np.zeros_like(V0), V0, case.dt, case.n_steps):
             row = probes.values(state, system)
             system.observe(state)
             recorder.record(state.n, row, state.iterations)

@@ -24,7 +24,7 @@ import scipy.sparse as sp
 
 from .coupling import cutout_points
 from .elements import DOFS_PER_NODE
-from .linalg import factorize_spd
+from .linalg import BlockFactors, factorize_spd, step_blocks
 from .sampling import DofSeries, carried_dofs, linear_parts, series_index
 
 
@@ -59,9 +59,9 @@ class CutoutWoodbury:
         self.F = F[:, self.series.source]  # on the series' sorted rows
         # A_h: the body without cut-outs, block-diagonal
         blocks = model.homogeneous_blocks
-        self.base = factorize_spd(sp.block_diag([k + sp.diags(a0 * m) for k, m in blocks], format="csr"))
+        self.base = factorize_spd(sp.block_diag(list(step_blocks(blocks, a0)), format="csr"))
         # S = I - V A_h^-1 V' = I - sum_l W_l G_l W_l', G_l the cut-out dofs' block of A_l^-1
-        lus = [factorize_spd(k + sp.diags(a0 * m)) for k, m in blocks]
+        lus = BlockFactors(step_blocks(blocks, a0)).factors
         G = np.stack([Ei @ lu.solve(Ei.T.toarray()) for lu, Ei in zip(lus, E)])  # (modes, dofs, dofs)
         capacitance = np.eye(len(x3) * F.shape[2]) - self._correction(F, G, dofs)
         self.chol = la.cho_factor(capacitance, lower=True, check_finite=False, overwrite_a=True)
