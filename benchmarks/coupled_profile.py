@@ -9,9 +9,12 @@ profiler), then one run under cProfile, its time split into model build, system 
 triangular solves, the Woodbury correction around them, the elastic operator applied (``K x``,
 ``M x``), stresses synthesized at the x3 points, the material law, forces projected back,
 probes, the rest. The split is of the profiled run, scaled to the plain run's CPU. Last, the
-bare solves: one block-diagonal solve of the step matrix, timed alone (the least of 30), times
-the run's iterations (an elastic step is one), which is the least any step of this
-discretization can cost; the ratio of the run's CPU to it is what the method's overhead costs.
+bare solves, each timed alone (the least of 30) times the run's iterations (an elastic step is
+one): one solve with the block-diagonal factors of the body without its cut-outs (what a step
+would cost if the harmonics did not couple), and one with the coupled form the run chooses
+(whole, Woodbury: the least a step of this discretization can cost, the limit); the ratios of
+the run's CPU to them are what the method's overhead costs.
+
 Imports (``python -c 'import smfem.solver'``) are listed apart: every entry point pays them once.
 
 ``--forms``: the forms of the coupled solve (:mod:`smfem.coupled_solve`) side by side on the
@@ -56,7 +59,7 @@ OPTIONS = ("bbar", "iteration_matrix", "direct_max_nonzeros", "x3_oversampling")
 #: (category, functions whose cumulative time it is, as (file suffix, function name))
 PARTS = (
     ("model", (("smfem/model.py", "__init__"),)),
-    ("system set-up", (("smfem/strategy.py", "build_system"),)),
+    ("system set-up", (("smfem/strategy.py", "choose"), ("smfem/strategy.py", "build"))),
     ("march", (("smfem/newmark.py", "march"), ("smfem/gauss.py", "march"))),
     ("triangular solves", (("smfem/linalg.py", "solve"), ("~", "<method 'solve' of 'SuperLU' objects>"))),
     ("woodbury", (("smfem/woodbury.py", "solve"),)),
@@ -92,20 +95,34 @@ def split(case_name: str, sets: dict) -> tuple[dict, dict]:
     return ({k: v for k, v in sets.items() if k not in OPTIONS}, {k: v for k, v in sets.items() if k in OPTIONS})
 
 
-def bare_solve_seconds(case, options) -> float:
-    """One solve with the step's block-diagonal factors, alone: the least of 30."""
-    from smfem.model import Model
-
-    model = Model(case, nonlinear=case.material.plastic, bbar=options.bbar)  # the modes the run keeps
-    blocks = model.homogeneous_blocks if model.coupling else [(s.K, s.M) for s in model.systems]
-    lu = factorize_spd(sp.block_diag(list(step_blocks(blocks, Constants.of(case.dt).a0)), format="csr"))
-    b = np.random.default_rng(0).normal(size=model.n_dof)
+def least_seconds(f, repeats: int = 30) -> float:
+    """The least CPU seconds of ``repeats`` calls of ``f``."""
     best = float("inf")
-    for _ in range(30):
+    for _ in range(repeats):
         t0 = time.process_time()
-        lu.solve(b)
+        f()
         best = min(best, time.process_time() - t0)
     return best
+
+
+def bare_solve_seconds(case, options) -> tuple[float, float]:
+    """One solve of the step matrix, alone (the least of 30): with the block-diagonal factors of
+    the body without its cut-outs (what a step would cost if the harmonics did not couple), and
+    with the coupled form the run chooses (:mod:`smfem.coupled_solve`: what a step of this
+    discretization needs at least)."""
+    from smfem import coupled_solve
+    from smfem.model import Model
+    from smfem.strategy import ITERATIONS_PER_STEP
+
+    model = Model(case, nonlinear=case.material.plastic, bbar=options.bbar)  # the modes the run keeps
+    a0 = Constants.of(case.dt).a0
+    blocks = model.homogeneous_blocks if model.coupling else [(s.K, s.M) for s in model.systems]
+    lu = factorize_spd(sp.block_diag(list(step_blocks(blocks, a0)), format="csr"))
+    b = np.random.default_rng(0).normal(size=model.n_dof)
+    solves = case.n_steps * (ITERATIONS_PER_STEP if case.material.plastic else 1)
+    form, _ = coupled_solve.choose(model, solves, options.direct_max_nonzeros)
+    coupled = coupled_solve.build(form, model, a0)
+    return least_seconds(partial(lu.solve, b)), least_seconds(partial(coupled.solve, b))
 
 
 def profile(name: str, sets: dict) -> dict:
@@ -135,8 +152,9 @@ def profile(name: str, sets: dict) -> dict:
     iterations = int(np.sum(profiled.iterations)) if getattr(profiled, "iterations", None) is not None else 0
     iterations = iterations or int(round(plain.info["iterations_mean"] * (len(plain.t) - 1))) or (len(plain.t) - 1)
     row["iterations"] = iterations
-    row["bare_solves_s"] = bare_solve_seconds(case, options) * iterations
-    row["cpu_over_bare"] = cpu / row["bare_solves_s"]
+    block, coupled = bare_solve_seconds(case, options)
+    row["bare_solves_s"], row["coupled_solves_s"] = block * iterations, coupled * iterations
+    row["cpu_over_bare"], row["cpu_over_coupled"] = cpu / row["bare_solves_s"], cpu / row["coupled_solves_s"]
     return row
 
 
@@ -220,13 +238,15 @@ def main(argv=None) -> None:
     print(f"imports: {import_seconds():.2f} CPU s")
     columns = ["model", "system set-up", "march", "triangular solves", "woodbury", "K x, M x", "synthesis", "law",
                "projection", "probes"]
-    print("| scene | settings | dof | CPU s | " + " | ".join(columns) + " | iterations | bare solves s | CPU / bare |")
-    print("|" + "---|" * (len(columns) + 7))
+    print("| scene | settings | dof | CPU s | " + " | ".join(columns) + " | iterations | bare solves s | CPU / bare "
+          "| coupled solves s | CPU / coupled |")
+    print("|" + "---|" * (len(columns) + 9))
     for name in args.scenes:
         r = profile(name, settings[name])
         print(f"| {r['scene']} | {r['settings']} | {r['n_dof']} | {r['cpu_s']:.2f} | "
               + " | ".join(f"{r[c]:.2f}" for c in columns)
-              + f" | {r['iterations']} | {r['bare_solves_s']:.2f} | {r['cpu_over_bare']:.1f} |", flush=True)
+              + f" | {r['iterations']} | {r['bare_solves_s']:.2f} | {r['cpu_over_bare']:.1f} | {r['coupled_solves_s']:.2f} "
+              f"| {r['cpu_over_coupled']:.1f} |", flush=True)
         print(f"  ({r['solve']})", flush=True)
 
 

@@ -233,8 +233,10 @@ class SamplePoints:
         self.x3, self.w, self.symmetry = sample_points(model, oversampling, at_least)
         self.images = self.symmetry.images(self.x3)  # fixed: fields, zones and probes map onto the points
         self.factor = inhomogeneity.element_factor(model.case, model.mesh, self.x3)  # (ne, n_x3)
-        self.scale = self.factor[None, :, None, :]
-        self.homogeneous = bool(np.all(self.factor == 1.0))  # no contrast material: no scaling
+        # only the elements where the factor is not 1 somewhere along x3 are scaled (a notch
+        # is a few of the section's elements: moving_load_notched quad9 2 of 20)
+        self.scaled = np.flatnonzero((self.factor != 1.0).any(axis=1))
+        self.scale = self.factor[self.scaled][None, :, None, :]
         dofs = carried_dofs(model)
         self.series = DofSeries(model, dofs, self.x3, self.w)
         self.to_stress, self.from_stress = section_maps(model, self.series, dofs)
@@ -253,8 +255,8 @@ class SamplePoints:
     def stress(self, u: np.ndarray) -> np.ndarray:
         """Elastic stresses (6, ne, ng, n_x3) of stacked amplitudes ``u``."""
         out = (self.to_stress @ self.series.values(u)).reshape(self.point_shape)
-        if not self.homogeneous:
-            out *= self.scale
+        if len(self.scaled):
+            out[:, self.scaled] *= self.scale
         return out
 
     def forces(self, sigma: np.ndarray) -> np.ndarray:

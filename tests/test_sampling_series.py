@@ -29,7 +29,7 @@ def dense_stress(model, points: SamplePoints, u: np.ndarray) -> np.ndarray:
         stress = (D @ (B @ (s.T @ u[lo:hi])[dofs][:, None, :, None]))[..., 0]  # (ne, ng, 6)
         psi = np.array(fourier.psi(s.mode, points.x3, model.body, model.length))[fourier.ROW_TYPE]  # (6, nq)
         out += np.einsum("egr,rq->regq", stress, psi)
-    return out * points.scale
+    return out * points.factor[None, :, None, :]
 
 
 def dense_forces(model, points: SamplePoints, sigma: np.ndarray) -> np.ndarray:
