@@ -262,9 +262,12 @@ class BlockIterative:
             t3 = tick()
             relaxed, loads, at = state.relaxed, self.loads, law_state.yielding
             if len(at):
+                change = trial[:, at] - sigma[:, at]  # = f D d_eps_p
                 relaxed = relaxed.copy()
-                relaxed[:, at] += trial[:, at] - sigma[:, at]  # = f D d_eps_p
-                loads = pts.forces(relaxed.reshape(pts.point_shape))
+                relaxed[:, at] += change
+                # the forces are linear in the relaxed stress: the committed ones plus those of
+                # the step's change, which is at the yielding points only
+                loads = self.loads + pts.forces_at(change, at)
             t4 = tick()
             self.timings["solves"] += t1 - t0
             self.timings["synthesis"] += t2 - t1

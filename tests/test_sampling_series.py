@@ -73,6 +73,18 @@ def test_series_stresses_and_forces_are_the_products_mode_by_mode(case, families
     for stresses in (sigma, expected):
         f = dense_forces(model, points, stresses)
         assert np.abs(points.forces(stresses) - f).max() <= 1e-12 * np.abs(f).max()
+    # stresses at a few scattered points only, as a step's plastic increments are
+    at = np.sort(rng.choice(sigma[0].size, size=max(3, sigma[0].size // 50), replace=False))
+    values = rng.normal(size=(6, len(at)))
+    f = dense_forces(model, points, scattered(points, values, at))
+    assert np.abs(points.forces_at(values, at) - f).max() <= 1e-12 * np.abs(f).max()
+
+
+def scattered(points: SamplePoints, values: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """Stresses ``values`` (6, k) at the flat points ``at``, zero elsewhere: (6, ne, ng, nq)."""
+    full = np.zeros((6, int(np.prod(points.point_shape[1:]))))
+    full[:, at] = values
+    return full.reshape(points.point_shape)
 
 
 class DensePoints(SamplePoints):
@@ -83,6 +95,9 @@ class DensePoints(SamplePoints):
 
     def forces(self, sigma):
         return dense_forces(self.model, self, sigma)
+
+    def forces_at(self, values, at):
+        return dense_forces(self.model, self, scattered(self, values, at))
 
 
 def test_a_plastic_run_through_the_series_has_the_histories_of_the_products_mode_by_mode(monkeypatch):
