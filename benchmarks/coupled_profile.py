@@ -66,7 +66,7 @@ PARTS = (
     ("K x, M x", (("smfem/coupling.py", "K"), ("smfem/coupling.py", "M"))),
     ("synthesis", (("smfem/sampling.py", "stress"),)),
     ("law", (("smfem/laws.py", "stress"),)),
-    ("projection", (("smfem/sampling.py", "forces"),)),
+    ("projection", (("smfem/sampling.py", "forces"), ("smfem/sampling.py", "forces_at"))),
     ("probes", (("smfem/probes.py", "values"),)),
 )
 

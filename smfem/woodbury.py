@@ -24,7 +24,7 @@ import scipy.sparse as sp
 
 from .coupling import cutout_points
 from .elements import DOFS_PER_NODE
-from .linalg import BlockFactors, factorize_spd, step_blocks
+from .linalg import factorize_spd, step_blocks
 from .sampling import DofSeries, carried_dofs, linear_parts, series_index
 
 
@@ -61,8 +61,11 @@ class CutoutWoodbury:
         blocks = model.homogeneous_blocks
         self.base = factorize_spd(sp.block_diag(list(step_blocks(blocks, a0)), format="csr"))
         # S = I - V A_h^-1 V' = I - sum_l W_l G_l W_l', G_l the cut-out dofs' block of A_l^-1
-        lus = BlockFactors(step_blocks(blocks, a0)).factors
-        G = np.stack([Ei @ lu.solve(Ei.T.toarray()) for lu, Ei in zip(lus, E)])  # (modes, dofs, dofs)
+        # one solve with the block-diagonal factors and a column per cut-out dof, unit in every
+        # mode's block at once (the blocks do not mix), gives every mode's block of A^-1 there
+        columns = self.base.solve(sp.vstack([Ei.T for Ei in E]).toarray())
+        offsets = np.cumsum([0] + [Ei.shape[1] for Ei in E])
+        G = np.stack([Ei @ columns[lo:hi] for Ei, lo, hi in zip(E, offsets[:-1], offsets[1:])])  # (modes, dofs, dofs)
         capacitance = np.eye(len(x3) * F.shape[2]) - self._correction(F, G, dofs)
         self.chol = la.cho_factor(capacitance, lower=True, check_finite=False, overwrite_a=True)
         self.rank = len(capacitance)
