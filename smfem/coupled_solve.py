@@ -8,9 +8,9 @@ The elastic path (one solve per step) and the plastic one (a solve per iteration
   unknowns, about ``n_c^3 / 3`` flops and ``n_c^2 / 2`` entries of fill (the notched strip at 400
   harmonics: ``n_c`` 4800, 10.4M entries measured, 11.5M predicted);
 * :class:`smfem.woodbury.CutoutWoodbury`: the diagonal blocks of the body without its cut-outs
-  plus a dense capacitance of the cut-outs' rank ``r`` (their x3 points times twice the cut-out
-  dofs, however many harmonics): ``r^3 / 3`` flops, ``n_c`` solves with the blocks, and per solve
-  two block solves and ``2 r^2``;
+  plus a dense capacitance of the cut-outs' rank ``r`` (their x3 point combinations times twice
+  the cut-out dofs, however many harmonics): ``r^3`` flops (its Cholesky factor and inverse),
+  ``n_c`` solves with the blocks, and per solve two block solves and ``2 r^2``;
 * :class:`Krylov`: conjugate gradients on the exact coupled operator
   (:class:`smfem.coupling.StackedOperator`) preconditioned by the diagonal blocks, each solve
   started from the last one's answer; no set-up beyond the blocks, but iterations per solve
@@ -30,7 +30,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
 from . import woodbury
-from .coupling import StackedOperator, cutout_points
+from .coupling import StackedOperator
 from .linalg import BlockFactors, available_bytes, factorize_spd, step_blocks
 
 #: the share of the memory available at the start that a factorization may take
@@ -106,12 +106,12 @@ def predicted_costs(model) -> dict[str, Cost]:
     modes = len(model.systems)
     cut = len(woodbury.cutout_dofs(model))
     n_c = modes * cut
-    n_points = len(cutout_points(model)[0])
+    n_points = woodbury.point_combinations(model)[1].shape[1]
     rank = n_points * 2 * cut
     # a block solve: forward and back through factors of about twice the blocks' nonzeros
     block = 4.0 * sum(s.K.nnz for s in model.systems)
     whole = Cost(setup=n_c**3 / 3, per_solve=block + 2.0 * n_c**2, memory=8.0 * (n_c**2 / 2 + block / 2))
-    low_rank = Cost(setup=cut * block + modes * rank * cut**2 + rank**2 * n_c + rank**3 / 3,
+    low_rank = Cost(setup=cut * block + modes * rank * cut**2 + rank**2 * n_c + rank**3,
                     per_solve=2 * block + 2.0 * rank**2 + 4.0 * modes * n_points * cut,
                     memory=8.0 * (rank * n_c + rank**2 + block))
     return {"whole": whole, "woodbury": low_rank}

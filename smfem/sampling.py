@@ -71,9 +71,12 @@ class DofSeries:
     dofs : (n,) full dofs, sorted, that some mode carries (:func:`carried_dofs`)
     x3 : (nq,) points along x3
     weights : (nq,) the points' weights in :meth:`project`
+    combine : (nq, r) optional: the series at ``r`` linear combinations of the points instead
+        (and ``weights`` then of the combinations)
     """
 
-    def __init__(self, model, dofs: np.ndarray, x3: np.ndarray, weights: np.ndarray):
+    def __init__(self, model, dofs: np.ndarray, x3: np.ndarray, weights: np.ndarray,
+                 combine: np.ndarray | None = None):
         S = model.systems
         self.n_modes, self.n_dof = len(S), len(dofs)
         self.k = np.array([fourier.wavenumber(s.mode, model.body, model.length) for s in S])
@@ -86,6 +89,8 @@ class DofSeries:
         n_first = int(np.sum(row_type == 0))
         self.types = (slice(0, n_first), slice(n_first, 2 * self.n_dof))
         psi = np.array([fourier.psi(s.mode, x3, model.body, model.length) for s in S])  # (modes, 2, nq)
+        if combine is not None:
+            psi = psi @ combine
         self.psi = psi.transpose(1, 0, 2).copy()  # (2, modes, nq): synthesis per basis type
         self.psi_w = (psi * weights).transpose(1, 2, 0).copy()  # (2, nq, modes): weighted projection
         self.E = sp.block_diag([sp.csr_matrix(s.T[dofs]) for s in S], format="csr")  # stacked -> (modes, dofs)

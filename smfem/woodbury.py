@@ -11,8 +11,9 @@ stiffness and lumped mass on ``U``). Its rank is at most the points times twice 
 however many harmonics there are: the notched strip at 400 harmonics couples 4800
 amplitudes through the notch, of rank 1968. With ``H_q = -F_q F_q'`` (``f < 1``) and
 ``V = F' Z``: ``A = A_h - V'V`` and ``A^-1 = A_h^-1 + A_h^-1 V' S^-1 V A_h^-1``,
-``S = I - V A_h^-1 V'``, symmetric positive definite, Cholesky-factorized once. A solve is two
-block-diagonal solves, the synthesis at the cut-out points and one dense solve of the rank's
+``S = I - V A_h^-1 V'``, symmetric positive definite, inverted once (through its Cholesky
+factor). A solve is two block-diagonal solves, the synthesis at the cut-out points (fewer
+combinations of them, :func:`point_combinations`) and one dense product of the rank's
 size, against a sparse factorization whose fill grows with the square of the modes.
 """
 
@@ -22,6 +23,7 @@ import numpy as np
 import scipy.linalg as la
 import scipy.sparse as sp
 
+from . import fourier
 from .coupling import cutout_points
 from .elements import DOFS_PER_NODE
 from .linalg import factorize_spd, step_blocks
@@ -33,9 +35,42 @@ def cutout_dofs(model) -> np.ndarray:
     return carried_dofs(model, np.unique(model.mesh.elements[model.cutout_elements]))
 
 
+#: singular values of the modes at a group's points below this share of the largest are
+#: dropped (:func:`point_combinations`)
+COMBINE_TOL = 1e-13
+
+
+def point_combinations(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The cut-out points as fewer combinations with the same energies: ``(x3, combine,
+    representative)``, ``combine`` (nq, r) and for each combination a point whose cut-out
+    factors it shares.
+
+    Points whose cut-out elements have the same factors (``excess``) share ``H_q`` up to their
+    weight, so there ``dA = sum_q w_q Z_q' H Z_q`` needs only the span of the modes' values
+    ``sqrt(w_q) psi(q)``: with the columns of ``P`` an orthonormal basis of it (an SVD, to
+    :data:`COMBINE_TOL`), the combinations ``sqrt(w_q) P[q, i]`` give the same sum. The
+    modes on a short interval have fewer independent values than the points that integrate
+    their products (moving_load_notched at 480 harmonics: 38 of 47; a ring whose modes share
+    a symmetry: notched_cylinder refine 8 at 160 harmonics 107 of 346)."""
+    x3, w, excess = cutout_points(model)
+    psi = np.array([fourier.psi(s.mode, x3, model.body, model.length) for s in model.systems])  # (modes, 2, nq)
+    values = np.sqrt(w)[:, None] * psi.transpose(2, 1, 0).reshape(len(x3), -1)  # (nq, 2 modes)
+    _, group = np.unique(excess.T, axis=0, return_inverse=True)
+    columns, representative = [], []
+    for g in range(group.max() + 1):
+        at = np.flatnonzero(group.ravel() == g)
+        P, sv, _ = np.linalg.svd(values[at], full_matrices=False)
+        P = P[:, sv > COMBINE_TOL * sv[0]]
+        block = np.zeros((len(x3), P.shape[1]))
+        block[at] = np.sqrt(w[at])[:, None] * P
+        columns.append(block)
+        representative += [at[0]] * P.shape[1]
+    return x3, np.concatenate(columns, axis=1), np.array(representative)
+
+
 def rank_bound(model) -> int:
-    """The most the correction's rank can be: points times the two series per dof."""
-    return len(cutout_points(model)[0]) * 2 * len(cutout_dofs(model))
+    """The most the correction's rank can be: point combinations times the two series per dof."""
+    return point_combinations(model)[1].shape[1] * 2 * len(cutout_dofs(model))
 
 
 class CutoutWoodbury:
@@ -43,14 +78,16 @@ class CutoutWoodbury:
 
     def __init__(self, model, a0: float):
         S = model.systems
-        x3, w, excess = cutout_points(model)
+        x3, combine, representative = point_combinations(model)
+        excess = cutout_points(model)[2][:, representative]
         dofs = cutout_dofs(model)
         n_dof = len(dofs)
-        self.series = DofSeries(model, dofs, x3, np.ones(len(x3)))
+        self.series = DofSeries(model, dofs, x3, np.ones(combine.shape[1]), combine)  # at the combinations
         E = [sp.csr_matrix(s.T[dofs]) for s in S]  # reduced -> cut-out dofs, per mode
-        H = self._energies(model, a0, dofs, excess)  # (nq, 2 dofs, 2 dofs), f - 1 < 0
-        # -w_q H_q = F_q F_q': the correction's factors, each point's padded to a common rank
-        lam, Y = np.linalg.eigh(-w[:, None, None] * H)
+        H = self._energies(model, a0, dofs, excess)  # (combinations, 2 dofs, 2 dofs), f - 1 < 0
+        # -H_q = F_q F_q' (the weights are in the combinations): the correction's factors, each
+        # combination's padded to a common rank
+        lam, Y = np.linalg.eigh(-H)
         keep = lam > 1e-12 * lam.max()
         rank = int(keep.sum(axis=1).max())
         order = np.argsort(-lam, axis=1)[:, :rank]
@@ -66,8 +103,14 @@ class CutoutWoodbury:
         columns = self.base.solve(sp.vstack([Ei.T for Ei in E]).toarray())
         offsets = np.cumsum([0] + [Ei.shape[1] for Ei in E])
         G = np.stack([Ei @ columns[lo:hi] for Ei, lo, hi in zip(E, offsets[:-1], offsets[1:])])  # (modes, dofs, dofs)
-        capacitance = np.eye(len(x3) * F.shape[2]) - self._correction(F, G, dofs)
-        self.chol = la.cho_factor(capacitance, lower=True, check_finite=False, overwrite_a=True)
+        capacitance = np.eye(F.shape[0] * F.shape[2]) - self._correction(F, G, dofs)
+        # S^-1 itself (its lower triangle), applied by one symmetric product a solve: it reads the
+        # triangle once where the Cholesky factor's two triangular solves read it twice and run
+        # slower (rank 5016: 7.4 against 22-26 ms a solve, for 2 s more set-up; equal to 1.5e-13)
+        factor, _ = la.cho_factor(capacitance, lower=True, check_finite=False, overwrite_a=True)
+        self.inverse, info = la.lapack.dpotri(factor, lower=1, overwrite_c=1)
+        if info:
+            raise la.LinAlgError(f"dpotri: the capacitance is singular ({info})")
         self.rank = len(capacitance)
 
     def _correction(self, F: np.ndarray, G: np.ndarray, dofs: np.ndarray) -> np.ndarray:
@@ -126,6 +169,6 @@ class CutoutWoodbury:
     def solve(self, b: np.ndarray) -> np.ndarray:
         y = self.base.solve(b)
         v = self._V(y)
-        z = la.cho_solve(self.chol, v.ravel(), check_finite=False).reshape(v.shape)
+        z = la.blas.dsymv(1.0, self.inverse, v.ravel(), lower=1).reshape(v.shape)
         return y + self.base.solve(self._Vt(z))
 
