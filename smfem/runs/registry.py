@@ -230,7 +230,7 @@ def _modal(case, progress, fields, every, options) -> RunResult:
 def _calculix(case, progress, fields, every, options) -> RunResult:
     from reference_fem.calculix import solve as calculix
 
-    return calculix(case, progress=progress)
+    return calculix(case, progress=progress, **(options or {}))
 
 
 def _smfem_options() -> dict:
@@ -272,6 +272,14 @@ _REFERENCE_OPTIONS = {
     "linear_solver": Spec(str, choices=("auto", "superlu", "pcg"),
                           help="Newton tangents: CG on the elastic factors (pcg), factorized (superlu), or auto"),
 }
+#: CalculiX's own options (reference_fem.calculix.procedures' names and bounds, written here as the
+#: reference's are)
+_CALCULIX_OPTIONS = {
+    "procedure": Spec(str, choices=("implicit", "explicit", "modal"),
+                      help="ccx's procedure: *DYNAMIC (implicit, the default), *DYNAMIC, EXPLICIT (linear elements, "
+                           "lumped mass, ccx's Courant increment) or *FREQUENCY then *MODAL DYNAMIC (modal)"),
+    "modes": Spec(int, 1, 20000, help="the modal procedure's mode count (default 100; fewer than the mesh's free dofs)"),
+}
 _EXPLICIT_OPTIONS = {
     **_ELEMENT_OPTIONS,
     "step_divisor": Spec(int, 1, 1000, help="divides the explicit step (a time ladder)"),
@@ -302,7 +310,8 @@ register(Solver(REF3D, **_ON_A_MESH, dim=3, label="reference FEM 3D", color="C2"
 register(Solver(MODAL, _modal, supports=frozenset(), label="reference FEM, harmonic model", color="C5", marker="v",
                 harmonics=True, command_line=False, series=False))
 register(Solver(CALCULIX, _calculix, supports=frozenset((PLASTICITY, FORCES)), label="CalculiX", color="C4", marker="D",
-                prose="CalculiX", dear=True))
+                prose="CalculiX", dear=True, options=partial(dict, _CALCULIX_OPTIONS),
+                make_options=partial(checked, specs=_CALCULIX_OPTIONS)))
 register(Solver(EXPLICIT, _explicit, supports=EVERYTHING - {FORCES}, label="reference FEM, explicit", color="C6",
                 marker="P", series=False, options=partial(dict, _EXPLICIT_OPTIONS),
                 make_options=partial(checked, specs=_EXPLICIT_OPTIONS)))
