@@ -112,3 +112,11 @@ def test_modal_dome_agrees_with_the_reference_in_time_and_its_truncation_shows()
     assert _worst(modal, reference, ("apex_uz",))["apex_uz"] < 0.01
     truncated = solve("calculix", case, options={"procedure": "modal", "modes": 2})
     assert _worst(truncated, reference, ("apex_uz",))["apex_uz"] > 0.03
+
+
+@needs_ccx
+def test_a_failed_eigensolve_is_a_failed_run_not_zero_histories():
+    """200 modes of the dome's 551 free dofs: ccx 2.20's ARPACK gives up (info = -3), and ccx
+    goes on with zero modes to zero histories; the run says it did not converge, and why."""
+    modal = solve("calculix", get_case("dome", {"t_end": 2e-5}), options={"procedure": "modal", "modes": 200})
+    assert not modal.converged and "eigensolver failed" in modal.message

@@ -117,6 +117,10 @@ def read_results(case, deck: Deck, work: Path, log: str = "") -> RunResult:
     converged = n_done == case.n_steps
     message = "" if converged else (f"calculix: stopped at t = {ccx_t[-1]:.6g} s, step {n_done} of {case.n_steps}: "
                                     f"{_last_error(log)}")
+    eigen = [line.strip() for line in log.splitlines() if EIGEN_FAILED.search(line)]
+    if eigen:  # ccx 2.20 goes on with zero modes, and writes zero histories as if all were well
+        converged, message = False, (f"calculix (modal): ccx's eigensolver failed ({eigen[0]}): too many modes for "
+                                     "this mesh; take fewer")
     info = {"procedure": deck.procedure, "element": deck.element, "n_elements": int(deck.elements.shape[0]),
             "dim": int(deck.points.shape[0]), "representation": deck.model.rep, "increments": len(increments),
             "time_step": "ccx's own, at most dt, interpolated onto the dt grid" if deck.procedure == IMPLICIT
@@ -129,6 +133,8 @@ def read_results(case, deck: Deck, work: Path, log: str = "") -> RunResult:
                      iterations=[int(i) for i in iterations], converged=bool(converged), message=message, info=info)
 
 
+#: ccx's eigensolver (ARPACK's d[n,s]aupd / d[n,s]eupd) did not give the modes asked for
+EIGEN_FAILED = re.compile(r"\*ERROR in d\[n,s\][ae]upd")
 #: how each procedure steps, for ``info['time_step']`` (the plastic implicit runs' own increments aside)
 TIME_STEP = {IMPLICIT: "dt", MODAL: "dt (each mode exact under piecewise-linear loads)",
              EXPLICIT: "ccx's own (Courant), the results at the dt grid"}
