@@ -215,7 +215,8 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
     targets = " and ".join(f"{100 * t:g} %" for t in metrics.TARGETS)
     (out / "README.txt").write_text(
         f"headline.csv: per case and solver, CPU time (s) of the cheapest run within {targets} total error\n"
-        "  against the case's truth, its settings, and SMFEM's speed-up\n"
+        "  against the case's truth, its settings, and SMFEM's speed-up (calculix: the cheapest of its\n"
+        "  procedures at each target, named in the cell; fronts.csv has each procedure's runs)\n"
         f"  error measure: {HEADLINE_MEASURE}\n"
         "stresses.csv: the same for the stress and plastic-strain probes (family), each family with its own\n"
         f"  targets ({'; '.join(f'{f}: ' + ' and '.join(f'{100 * t:g} %' for t in ts) for f, (_, ts) in FAMILIES.items())})\n"

@@ -51,6 +51,7 @@ def test_the_quick_plan_has_a_light_calculix_series_only_where_ccx_is_found(foun
     assert lookup(CALCULIX_MODAL).installed() == found
     light = {study.case: s.levels for study in quick() for s in study.series if s.solver == CALCULIX_MODAL}
     # two levels of the cheapest procedure, modal (benchmarks/README.md), on the scenes where ccx is cheap
-    assert light == ({"dome": ({"refine": 1, "modes": 50}, {"refine": 2, "modes": 50}),
-                      "thick_cylinder": ({"modes": 50}, {"modes": 100})} if found else {})
+    two = ({"modes": 50}, {"modes": 100})
+    assert light == ({"dome": ({"refine": 1, "modes": 50}, {"refine": 2, "modes": 50}), "thick_cylinder": two,
+                      "layered_cylinder_pulse": two, "moving_load": two} if found else {})
     assert not any(s.solver == CALCULIX_EXPLICIT for study in quick() for s in study.series)

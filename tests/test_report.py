@@ -197,8 +197,8 @@ def test_every_case_of_the_quick_report_has_a_truth():
         calculix = [s.levels for s in study.series if s.solver == CALCULIX]
         # ... nor the loads issue's scenes (48 and 123 CPU s in ccx: the full report's), nor the
         # layered cylinder since the contact scenes came in (44 CPU s); its implicit procedure
-        # only where a scene's contact refuses it (the report says why), its modal one on the
-        # dome and thick cylinder (tests/test_plan.py)
+        # only where a scene's contact refuses it (the report says why), its modal one on four
+        # scenes (tests/test_plan.py)
         contact = study.case in ("rod_impact", "rod_collision", "ring_in_ring")
         assert calculix == ([({},)] if contact else []), study.case
 
