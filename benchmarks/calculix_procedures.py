@@ -4,9 +4,9 @@ a target (1 %; 5 % on the notched cylinder).
     python benchmarks/calculix_procedures.py [--budget S] [--procedures P ...] [--tiny] [SCENE ...]
 
 Per scene, each procedure that takes it (of ``--procedures``, default all) runs its ladder
-cheapest first (as a study's carried series, ``smfem.studies.ladder``): ``explicit`` over the
-meshes r1, r2, r4, ``modal`` over those meshes x 50, 100, 200, 400 modes (the full plan's
-ladders), ``implicit`` over the meshes at dt, dt / 2, dt / 4; a ladder stops at the target, or before a run
+cheapest first (as a study's carried series, ``smfem.studies.ladder``): ``explicit`` and
+``modal`` over the full plan's levels (``smfem.studies.plan.CCX_EXPLICIT``, ``CCX_MODAL``: meshes,
+and meshes x modes), ``implicit`` over the meshes at dt, dt / 2, dt / 4; a ladder stops at the target, or before a run
 whose predicted CPU time passes ``--budget`` (default 300 s), or when its last run took more
 than that. One line per run: procedure, level, headline error against the stored truth
 (``smfem.studies.metrics.headline_error``), ccx's CPU time. A refused procedure prints its one
@@ -22,8 +22,9 @@ import math
 from cases import UnsupportedCase, get_case
 from cases.params import ToolMissing
 from smfem.api import truth as stored_truth
-from smfem.runs.registry import CALCULIX, solve
+from smfem.runs.registry import CALCULIX, CALCULIX_MODAL, solve, split_level
 from smfem.studies.metrics import headline_error
+from smfem.studies.plan import CCX_EXPLICIT, CCX_MODAL
 
 PROCEDURES = ("explicit", "modal", "implicit")
 SCENES = ("thick_cylinder", "dome", "notched_strip", "layered_cylinder", "layered_cylinder_pulse", "moving_load",
@@ -39,8 +40,8 @@ def ladders(name: str) -> dict[str, list[dict]]:
     """Per procedure its levels, cheapest first (by :func:`work`): ``(case overrides, options)``."""
     dt = get_case(name).dt
     levels = {
-        "explicit": [({"refine": r}, {}) for r in (1, 2, 4)],
-        "modal": [({"refine": r}, {"modes": m}) for r in (1, 2, 4) for m in (50, 100, 200, 400)],
+        "explicit": [(level, {}) for level in CCX_EXPLICIT],
+        "modal": [split_level(CALCULIX_MODAL, level) for level in CCX_MODAL],
         "implicit": [({"refine": r, "dt": dt / d}, {}) for r in (1, 2) for d in (1, 2, 4)],
     }
     return {p: sorted(ls, key=lambda level: work(name, p, *level)) for p, ls in levels.items()}

@@ -11,7 +11,7 @@ import pytest
 from cases import UnsupportedCase, get_case
 from reference_fem.calculix.procedures import refuse
 from smfem.runs.registry import CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, lookup
-from smfem.studies.plan import CCX_MODAL, FULL_UNTIL, full, quick
+from smfem.studies.plan import CCX_EXPLICIT, CCX_MODAL, FULL_UNTIL, full, quick
 from smfem.studies.study import job_of
 
 PROCEDURES = {CALCULIX_EXPLICIT: "explicit", CALCULIX_MODAL: "modal"}
@@ -35,7 +35,7 @@ def test_the_full_plan_carries_each_procedure_that_takes_a_scene_and_keeps_the_r
             s = series[solver]
             if _takes(study.case, procedure):
                 assert s.until == FULL_UNTIL, (study.case, solver)
-                assert s.levels == (CCX_MODAL if procedure == "modal" else tuple({"refine": r} for r in (1, 2, 4)))
+                assert s.levels == (CCX_MODAL if procedure == "modal" else CCX_EXPLICIT)
             else:  # one run, refused in the solver's one line before ccx starts
                 assert s.levels == ({},) and s.until is None, (study.case, solver)
         modal = [job_of(study)(CALCULIX_MODAL, level) for level in series[CALCULIX_MODAL].levels]
