@@ -6,17 +6,18 @@ reference run, as the paper made it, and the published extrema.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from collections import Counter
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
 
 from cases import get_case
 
-from smfem.runs.registry import SMFEM, lookup
+from smfem.runs.registry import SMFEM, headline_name, lookup
 
 from smfem.studies import effectivity, metrics
-from smfem.studies.jobs import NOT_AVAILABLE, OK
+from smfem.studies.jobs import NOT_AVAILABLE, NOT_INSTALLED, OK
 from smfem.studies.plan import series_solvers
 from .references import best_history, published_points
 from smfem.studies.study import CaseRuns
@@ -94,12 +95,53 @@ class CaseAnalysis:
         costs = [s.costs if family == "headline" else s.family_costs[family] for s in mine]
         return {t: metrics.cheapest(c[t] for c in costs) for t in costs[0]}
 
+    def competitors(self) -> dict[str, SolverSummary]:
+        """The headline's rows: a solver's series each, but one row for the series of a solver's
+        procedures (:func:`smfem.runs.registry.headline_name`: CalculiX's), at each target the
+        cheapest of them (:func:`merged`); a solver not installed here is no row."""
+        groups: dict[str, dict] = {}
+        for solver, s in self.solvers.items():
+            if s.status != NOT_INSTALLED:
+                groups.setdefault(headline_name(solver), {})[solver] = s
+        return {name: merged(name, group) for name, group in groups.items()}
+
+    def left_out(self) -> list[str]:
+        """Why a series sharing a headline row with others has no runs (its solver's one line:
+        a procedure that cannot take the scene), where the row's cell does not say it already."""
+        rows = self.competitors()
+        shared = Counter(headline_name(solver) for solver, s in self.solvers.items() if s.status != NOT_INSTALLED)
+        return [f"{lookup(solver).label}: {s.message}" for solver, s in self.solvers.items()
+                if s.status not in (OK, NOT_INSTALLED) and shared[headline_name(solver)] > 1
+                and s.message != rows[headline_name(solver)].message]
+
     def probes_of(self, family: str) -> list[str]:
         return [p.name for p in self.case.probes if family_of(p) == family]
 
     def uncertainty_of(self, family: str) -> float:
         """The truth's uncertainty over a family's probes (NaN without a truth or a converged one)."""
         return self.truth.uncertainty_of(self.probes_of(family)) if self.truth is not None else math.nan
+
+
+def merged(name: str, series: dict[str, SolverSummary]) -> SolverSummary:
+    """One headline row ``name`` of ``series`` (solver -> summary; one solver's procedures): at
+    each target the cheapest that reaches it, else the one that came closest
+    (:func:`smfem.studies.metrics.cheapest`), its cell naming the series' :attr:`variant
+    <smfem.runs.registry.Solver.variant>` (``modal r2 modes 50``); every run's point; where
+    none ran, the first's status and reason."""
+    ran = {solver: s for solver, s in series.items() if s.status == OK}
+    if not ran:
+        return replace(next(iter(series.values())), solver=name)
+    named = [{t: _named(c, lookup(solver).variant) for t, c in s.costs.items()} for solver, s in ran.items()]
+    costs = {t: metrics.cheapest(c[t] for c in named) for t in named[0]}
+    points = pd.concat([s.points for s in ran.values()], ignore_index=True)
+    return SolverSummary(name, OK, "", points, [], costs)
+
+
+def _named(cost: metrics.Cost, variant: str) -> metrics.Cost:
+    """``cost`` with its settings led by ``variant`` (reached: ``modal r2``; missed: ``modal``)."""
+    if not variant or cost.how not in (metrics.REACHED, metrics.NOT_REACHED):
+        return cost
+    return replace(cost, label=f"{variant} {cost.label}".strip())
 
 
 def _dt(run) -> float:

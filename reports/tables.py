@@ -114,14 +114,15 @@ def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | No
 
 def headline_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     """Per case and solver: the truth and its uncertainty, the best total error, the CPU time
-    (and settings) of the cheapest run reaching each target, and SMFEM's speed-up there."""
+    (and settings) of the cheapest run reaching each target, and SMFEM's speed-up there; the
+    series of one solver's procedures (CalculiX's) one row, at each target the cheapest
+    procedure, named in the cell (:meth:`reports.analysis.CaseAnalysis.competitors`)."""
     rows = []
     for an in analyses:
         mine = an.smfem_costs()
         truth = an.truth.name if an.truth is not None else "none available"
-        for solver, s in an.solvers.items():
-            if s.status == NOT_INSTALLED:  # named in the case's section, not a row
-                continue
+        # CalculiX's procedures one row; a solver not installed is named in the case's section
+        for solver, s in an.competitors().items():
             row = {"case": an.case.name, "solver": solver, "truth": truth,
                    "truth_uncertainty_pct": 100 * an.truth_uncertainty, "runs": len(s.points),
                    "best_error_pct": 100 * s.points.total.min() if s.status == OK and len(s.points) else math.nan}
@@ -214,7 +215,8 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
     targets = " and ".join(f"{100 * t:g} %" for t in metrics.TARGETS)
     (out / "README.txt").write_text(
         f"headline.csv: per case and solver, CPU time (s) of the cheapest run within {targets} total error\n"
-        "  against the case's truth, its settings, and SMFEM's speed-up\n"
+        "  against the case's truth, its settings, and SMFEM's speed-up (calculix: the cheapest of its\n"
+        "  procedures at each target, named in the cell; fronts.csv has each procedure's runs)\n"
         f"  error measure: {HEADLINE_MEASURE}\n"
         "stresses.csv: the same for the stress and plastic-strain probes (family), each family with its own\n"
         f"  targets ({'; '.join(f'{f}: ' + ' and '.join(f'{100 * t:g} %' for t in ts) for f, (_, ts) in FAMILIES.items())})\n"

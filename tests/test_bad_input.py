@@ -124,6 +124,15 @@ def test_the_reports_bad_input_sweep_refuses_every_value():
         (["run", "notched_strip", "--set", "notch_depth=0.05"], "notch_depth"),  # the probe would be in the void
         (["run", "dome", "--set", "q=0"], "nothing moves"),  # a valid value, a clear refusal by the solver
         (["run", "dome", "--solver", "ansys"], "invalid choice"),
+        # CalculiX's procedures: refused before ccx runs (so also where it is not installed)
+        (["run", "dome", "--solver", "calculix", "--set", "procedure=newmark"], "procedure"),
+        (["run", "notched_strip", "--solver", "calculix", "--set", "procedure=modal"], "takes no plasticity"),
+        (["run", "rod_impact", "--solver", "calculix", "--set", "procedure=modal"], "takes no contact"),
+        (["run", "rod_impact", "--solver", "calculix", "--set", "procedure=explicit"], "contact is not exported"),
+        (["run", "dome", "--solver", "calculix", "--set", "modes=20"], "the modal procedure's option"),
+        (["run", "dome", "--solver", "calculix", "--set", "procedure=modal", "--set", "modes=0"], "modes"),
+        (["run", "dome", "--solver", "calculix", "--set", "procedure=modal", "--set", "modes=5000"], "free dofs"),
+        (["run", "dome", "--solver", "smfem", "--set", "procedure=modal"], "an option of calculix"),
         (["run"], "required: case"),
         (["run", "dome", "--tol", "5%", "--max-cpu", "-5"], "--max-cpu"),
         (["study", "dome", "--workers", "0"], "--workers"),

@@ -111,3 +111,17 @@ def test_the_session_pool_is_replaced_after_a_worker_dies():
         in_worker(os._exit, 1, workers=1).result()
     queue = [Job.make("dome", SMFEM, {"t_end": 1e-5})]
     assert [outcome.status for _, outcome in run_jobs(queue, workers=1)] == ["ok"]
+
+
+def test_a_level_carries_a_solver_option_to_its_job_and_its_ladder_orders_by_it():
+    """CalculiX's modal levels are meshes x modes: ``modes`` is the run's option, not the case's
+    (its job's options, its label), and the ladder orders and predicts by it too."""
+    from smfem.runs.registry import CALCULIX_MODAL
+
+    levels = ({"refine": 2, "modes": 50}, {"refine": 1, "modes": 400}, {"refine": 1, "modes": 50})
+    ladder = _ladder(Until(), CALCULIX_MODAL, levels)
+    assert [(dict(j.overrides)["refine"], dict(j.options)) for j in ladder.jobs] == [
+        (1, {"modes": 50}), (2, {"modes": 50}), (1, {"modes": 400})]
+    assert "modes" not in ladder.jobs[0].resolved.params
+    assert Run(ladder.jobs[1], "ok", "", None).label == "r2 modes 50"
+    assert work(ladder.params[2], False) == pytest.approx(16 * work(ladder.params[1], False))

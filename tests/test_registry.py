@@ -6,18 +6,21 @@ refuse."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
+from types import SimpleNamespace
 
 import pandas as pd
 import pytest
 
-from cases import UnsupportedCase, get_case, rebuild
+from cases import ParameterError, UnsupportedCase, get_case, rebuild
 from smfem.cli import main
 from reports import figures
 from reports.build import build
 from smfem.studies.plan import MODAL_TRUTH, REF2D, SMFEM, CaseStudy, Series, TruthPlan
 import smfem.runs.figures
 from smfem.runs import registry
-from smfem.runs.registry import CALCULIX, CONTACT, PLASTICITY, REF3D, REFERENCE, SMFEM_QUAD9, Solver, lookup, solvers
+from smfem.runs.registry import (CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, CONTACT, PLASTICITY, REF3D, REFERENCE,
+                                 SMFEM_QUAD9, Solver, lookup, solvers)
 
 COARSE = "reference-coarse"
 
@@ -94,7 +97,8 @@ def test_the_table_keeps_the_reports_styles_labels_and_choices():
     """Today's figures: the four solvers of a study drawn as before the table."""
     drawn = {s.name: (s.color, s.marker, s.label) for s in solvers() if s.series}
     assert drawn == {SMFEM: ("C0", "o", "SMFEM"), SMFEM_QUAD9: ("C3", "*", "SMFEM quad9"), REF2D: ("C1", "s", "reference FEM 2D"),
-                     REF3D: ("C2", "^", "reference FEM 3D"), CALCULIX: ("C4", "D", "CalculiX")}
+                     REF3D: ("C2", "^", "reference FEM 3D"), CALCULIX: ("C4", "D", "CalculiX"),
+                     CALCULIX_EXPLICIT: ("C4", ">", "CalculiX explicit"), CALCULIX_MODAL: ("C4", "d", "CalculiX modal")}
     assert [s.name for s in solvers() if s.command_line] == [SMFEM, REFERENCE, CALCULIX, "reference-explicit"]
     assert {s.name: s.dim for s in solvers() if s.dim} == {REF2D: 2, REF3D: 3}
 
@@ -111,3 +115,30 @@ def test_a_solver_without_a_feature_refuses_a_case_that_needs_it(feature, case, 
     for entry in lacking:
         with pytest.raises(UnsupportedCase):
             registry.solve(entry.name, get_case(*case))
+
+
+def test_calculix_procedures_are_series_of_their_own_in_one_headline_row():
+    """An entry that fixes a solver option (CalculiX's procedure) is a series of its own, the
+    option added to every run and a clash refused in one line; its headline row is its family's,
+    its cells named by its variant; a level's option (``modes``) is the run's, not the case's."""
+    from smfem.studies.jobs import Job
+
+    seen = {}
+
+    def run(case, **how):  # what ccx would be handed
+        seen.update(how["options"])
+        return SimpleNamespace(mesh=None)
+
+    modal = lookup(CALCULIX_MODAL)
+    registry.solve(replace(modal, run=run), get_case("dome"), options={"modes": 50})
+    assert seen == {"modes": 50, "procedure": "modal"}
+    with pytest.raises(ParameterError, match="calculix-modal runs with procedure=modal, not procedure=explicit"):
+        registry.solve(modal, get_case("dome"), options={"procedure": "explicit"})
+    assert {s.name: s.variant for s in solvers() if s.family == CALCULIX} == {
+        CALCULIX: "implicit", CALCULIX_EXPLICIT: "explicit", CALCULIX_MODAL: "modal"}
+    assert [registry.headline_name(s) for s in (CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, SMFEM_QUAD9, REF3D)] == [
+        CALCULIX, CALCULIX, CALCULIX, SMFEM_QUAD9, REF3D]
+    assert registry.split_level(CALCULIX_MODAL, {"refine": 2, "modes": 50}) == ({"refine": 2}, {"modes": 50})
+    gauss = {"refine": 2, "time_scheme": "gauss"}  # a case parameter, though SMFEM's alone
+    assert registry.split_level("smfem", gauss) == (gauss, {})
+    assert Job.make("dome", CALCULIX_MODAL, {"refine": 2}).overrides == (("refine", 2),)  # the name says the procedure

@@ -1,16 +1,18 @@
 """A case as an Abaqus/CalculiX input deck (``.inp``) on the reference FEM's mesh.
 
-The mesh's quadratic Lagrange elements lose their face and centre nodes and become serendipity
-elements: CPE8 (plane strain), CAX8 (axisymmetric; x = r, y = z) or C3D20. Everything else is
-the case's: the elastic material, von Mises plasticity as a table (ideal, or linear isotropic
-hardening), a material and a solid section per region of another material (on the element set
-of its elements), the loads under their amplitudes (:mod:`.loads`: pressures as element-face
-loads, a moving one per facet, force terms as nodal forces), the reference's supports (so the
-same dofs are fixed), the initial velocity, implicit dynamics (fixed
-increments of dt where linear; see :func:`fixed_increments`) and Newmark's average acceleration (``ALPHA = 0``: beta = 1/4, gamma = 1/2, the
-case's convention) and output at every increment. A rigid wall is a unilateral gap element
-(GAPUNI) from each node of the struck face to a fixed ground node, with the spring of the
-case's contact layer (exported for the user; :mod:`.solver` does not solve wall scenes).
+The procedure (:mod:`.procedures`) picks the elements: for the implicit and modal ones the mesh's
+quadratic Lagrange elements lose their face and centre nodes and become serendipity elements
+(CPE8 plane strain, CAX8 axisymmetric (x = r, y = z) or C3D20); for the explicit one each is
+split into linear elements on the same nodes (CPE4, CAX4 or C3D8, :mod:`.linear`). Everything
+else is the case's: the elastic material, von Mises plasticity as a table (ideal, or linear
+isotropic hardening), a material and a solid section per region of another material (on the
+element set of its elements), the loads under their amplitudes (:mod:`.loads`: pressures as
+element-face loads, a moving one per facet, force terms as nodal forces), the reference's
+supports (so the same dofs are fixed), the initial velocity and the procedure's step. A run's
+deck writes only what its probes read (:func:`output_cards`); an exported one (``fields``)
+the fields at every increment too. A rigid wall is a unilateral gap element (GAPUNI) from each
+node of the struck face to a fixed ground node, with the spring of the case's contact layer
+(exported for the user; :mod:`.solver` does not solve wall scenes).
 """
 
 from __future__ import annotations
@@ -27,7 +29,9 @@ from ..face import plane_face
 from ..frames import AXISYMMETRIC, SOLID, body_point_to_mesh
 from ..mesh import vtk_cells
 from ..model import Model
-from .loads import Amplitudes, force_cards, pressure_cards, refuse_early
+from .linear import face_children, split
+from .loads import Amplitudes, force_cards, pressure_cards, refuse_early, serendipity_forces
+from .procedures import EXPLICIT, IMPLICIT, MODAL, MODES, check_modes, element, fixed_increments, linear, refuse, step_cards
 
 #: corner nodes (0-based, in the element's order) of each face P1 ... of CPE8/CAX8 and C3D20
 FACES = {
@@ -36,8 +40,6 @@ FACES = {
 }
 #: nodes of the serendipity element (its corners and mid-sides) by mesh dimension
 CORNERS = {2: 8, 3: 20}
-#: smallest increment ccx may cut back to, as a fraction of dt (plastic and contact runs)
-MIN_INCREMENT = 1e-4
 PER_LINE = 8  # numbers per data line (Abaqus allows 16; short lines read better)
 
 
@@ -48,25 +50,37 @@ class Deck:
     Attributes
     ----------
     text : the ``.inp`` file
-    element : ``'CPE8'``, ``'CAX8'`` or ``'C3D20'``
+    element : ``'CPE8'``, ``'CAX8'``, ``'C3D20'`` (serendipity) or ``'CPE4'``, ``'CAX4'``,
+        ``'C3D8'`` (linear)
     points : mesh-frame coordinates of every node of the reference mesh, ``(dim, n)``; node
-        ``k`` of the deck is ``k + 1`` (the Lagrange face and centre nodes are left out)
-    cells : the reference mesh's cells (VTK quad9 / hexahedron27 order), ``(n_elements, 9 | 27)``
+        ``k`` of the deck is ``k + 1`` (a serendipity deck leaves the Lagrange face and centre
+        nodes out)
+    cells : the reference mesh's cells (VTK quad9 / hexahedron27 order), ``(n_cells, 9 | 27)``
+    elements : the deck's elements by their nodes (0-based), ``(n_elements, 4 | 8 | 20)``
     model : the reference model the deck was made from (supports, mass, faces)
     probe_nodes : probe name -> deck node at the probe point (point probes only)
+    procedure : :data:`.procedures.PROCEDURES`
     """
 
     text: str
     element: str
     points: np.ndarray
     cells: np.ndarray
+    elements: np.ndarray
     model: Model
     probe_nodes: dict = field(default_factory=dict)
     frd_bytes: float = 0.0
+    procedure: str = IMPLICIT
 
     @property
-    def corner_count(self) -> int:
-        return CORNERS[self.points.shape[0]]
+    def nodes(self) -> np.ndarray:
+        """The deck's nodes (0-based), sorted."""
+        return np.unique(self.elements)
+
+    @property
+    def serendipity(self) -> bool:
+        """Its elements leave the Lagrange face and centre nodes out (:func:`.solver.complete`)."""
+        return not linear(self.procedure)
 
 
 #: characters of one node's line in an ASCII .frd block of ``c`` components (" -1", the node
@@ -94,10 +108,13 @@ CONTACT_PAIRS_REFUSED = (
     "both run only 100 times softer, which is not the scene")
 
 
-def build_deck(case, every: int = 1) -> Deck:
-    """The deck of ``case`` at its parameters (``dim`` 2 or 3, ``refine``, ``dt``, ``t_end``);
-    results written to the .frd every ``every`` increments (``smfem run --solver calculix``
-    reads every one)."""
+def build_deck(case, every: int = 1, procedure: str = IMPLICIT, modes: int | None = None,
+               fields: bool = True) -> Deck:
+    """The deck of ``case`` at its parameters (``dim`` 2 or 3, ``refine``, ``dt``, ``t_end``)
+    run by ``procedure`` (:mod:`.procedures`; ``modes``: the modal one's mode count); with
+    ``fields`` (``smfem export``) the fields written to the .frd every ``every`` increments, else
+    only what the probes read (``smfem run --solver calculix``)."""
+    refuse(case, procedure, modes)
     if case.wall is not None and case.wall.slope:
         raise UnsupportedCase("calculix: a tilted wall (wall_slope > 0) is not exported; use wall_slope=0")
     if case.wall is not None and case.material.plastic:
@@ -112,28 +129,33 @@ def build_deck(case, every: int = 1) -> Deck:
         raise UnsupportedCase("calculix: a material varying along x3 (variation) is not exported")
     refuse_early(case)
     model = Model(case)
-    mesh, rep, dim = model.rmesh.mesh, model.rep, model.dim
+    mesh, dim = model.rmesh.mesh, model.dim
     _, cells = vtk_cells(mesh)
-    n_corner = CORNERS[dim]
-    element = "C3D20" if rep == SOLID else ("CAX8" if rep == AXISYMMETRIC else "CPE8")
-    used = np.unique(cells[:, :n_corner])
+    name = element(model.rep, procedure)
+    # a linear deck has every node; a serendipity one its cells' corners and mid-sides
+    children = 2**dim if linear(procedure) else 1
+    elements = split(cells) if children > 1 else cells[:, : CORNERS[dim]]
+    used = np.unique(elements)
+    if procedure == MODAL:
+        check_modes(modes or MODES, used.size * dim - np.isin(model.fixed // dim, used).sum())
     points = np.asarray(model.nodes_x, float)
     points = np.where(np.abs(points) < 1e-12 * np.abs(points).max(), 0.0, points)  # see _number
     out = [
         f"** {case.title}",
         f"** written by smfem export from case {case.name!r} with {_params(case)}",
-        f"** units: {case.units}; element {element} on the reference FEM's mesh "
-        f"({mesh.nelements} elements, refine {case.refine})",
+        f"** units: {case.units}; element {name} on the reference FEM's mesh "
+        f"({mesh.nelements} elements, refine {case.refine}" + (f", each split in {children})" if children > 1 else ")"),
+        f"** procedure: {procedure}" + (f", {modes or MODES} modes" if procedure == MODAL else ""),
         "*HEADING",
         f"smfem case {case.name}",
         "*NODE, NSET=NALL",
         *(_row([k + 1, *(_number(x) for x in points[:, k])]) for k in used),
-        f"*ELEMENT, TYPE={element}, ELSET=EALL",
-        *(_row([e + 1, *(cells[e, :n_corner] + 1)]) for e in range(mesh.nelements)),
+        f"*ELEMENT, TYPE={name}, ELSET=EALL",
+        *(_row([e + 1, *(nodes + 1)]) for e, nodes in enumerate(elements)),
     ]
     if case.wall is not None:
-        out += _wall(model, points, cells, element)
-    out += _sections(case, model)
+        out += _wall(model, points, cells, name)
+    out += _sections(case, model, children)
     out += _supports(model, used)
     out += _initial_velocity(case, model, used)
     probe_nodes = _probe_nodes(case, model, points, used)
@@ -144,30 +166,62 @@ def build_deck(case, every: int = 1) -> Deck:
                 "*NSET, NSET=PROBES", *_rows(sorted(set(probe_nodes.values())))]
     # the loads first: what cannot be exported is refused before anything else is done
     amplitudes = Amplitudes(case.t_end)
-    loads = pressure_cards(case, model, lambda facets: _element_faces(model, cells, facets, dim), amplitudes)
-    loads += force_cards(case, model, cells, amplitudes)
+
+    def faces(facets):
+        return [(e * children + s, k) for e, k in _element_faces(model, cells, facets, dim)
+                for s in (face_children(dim, k - 1, FACES[dim]) if children > 1 else (0,))]
+
+    loads = pressure_cards(case, model, faces, amplitudes)
+    # the reference's nodal forces: on every node of a linear deck, moved onto a serendipity one's
+    loads += force_cards(case, model, amplitudes, (lambda F: F) if children > 1 else
+                         (lambda F: serendipity_forces(F, cells, dim)))
     out += ["*AMPLITUDE, NAME=STEPLOAD", f"0., 1., {case.t_end:.13g}, 1.", *amplitudes.cards()]
-    if fixed_increments(case):
-        out += [f"*STEP, INC={case.n_steps + 10}", "*DYNAMIC, DIRECT, ALPHA=0.", f"{case.dt:.13g}, {case.t_end:.13g}"]
-    else:  # ccx's own increments, at most dt, cut back where its Newton does not converge
-        out += [f"*STEP, INC={100 * case.n_steps}", "*DYNAMIC, ALPHA=0.",
-                f"{case.dt:.13g}, {case.t_end:.13g}, {case.dt * MIN_INCREMENT:.13g}, {case.dt:.13g}"]
+    out += step_cards(case, procedure, modes)
     out += loads
+    out += output_cards(case, dim, procedure, every) if fields else probe_output(case, dim, procedure)
+    out += ["*END STEP", ""]
+    return Deck("\n".join(out), name, points, cells, elements, model, probe_nodes,
+                frd_size(case, used.size, every) if fields else 0.0, procedure)
+
+
+def output_cards(case, dim: int, procedure: str, every: int) -> list[str]:
+    """The fields every ``every`` increments (an exported deck's, for the user's post-processor)
+    and the probes' displacements in the .dat."""
     node_out = "U, V" + (", RF" if case.wall is not None else "")
     el_out = "S" + (", PEEQ" if case.material.plastic else "")
-    two_d = ("" if dim == 3 else ", OUTPUT=2D") + (f", FREQUENCY={every}" if every > 1 else "")
-    out += [f"*NODE FILE{two_d}", node_out, f"*EL FILE{two_d}", el_out]
-    if probe_nodes:
+    options = _output_options(dim, procedure) + (f", FREQUENCY={every}" if every > 1 else "")
+    out = [f"*NODE FILE{options}", node_out, f"*EL FILE{options}", el_out]
+    if any(p.kind == "point" for p in case.probes):
         out += ["*NODE PRINT, NSET=PROBES", "U"]
-    out += ["*END STEP", ""]
-    return Deck("\n".join(out), element, points, cells, model, probe_nodes, frd_size(case, used.size, every))
+    return out
 
 
-def fixed_increments(case) -> bool:
-    """Linear runs march at the case's dt exactly. With plasticity ccx's Newton can fail at dt
-    in the first steps of a shock load (the thick cylinder at nu = 0, in its first increment):
-    there ccx chooses its increments, at most dt, and the results are interpolated onto dt."""
-    return not case.material.plastic
+#: the .frd's result of each probe field, and whether it is a nodal (else an element) output
+PROBE_RESULTS = {"u": ("U", True), "v": ("V", True), "sigma": ("S", False), "peps": ("PEEQ", False)}
+
+
+def probe_output(case, dim: int, procedure: str) -> list[str]:
+    """What the probes read, each result once, on the probes' node set where every probe of it
+    is a point probe, else on the whole body: a user timing ccx writes no more."""
+    nodal, element_out = {}, {}
+    for probe in case.probes:
+        result, is_nodal = PROBE_RESULTS[probe.field]
+        where = nodal if is_nodal else element_out
+        where[result] = where.get(result, True) and probe.kind == "point"
+    options = _output_options(dim, procedure)
+    out = []
+    for card, results in (("*NODE FILE", nodal), ("*EL FILE", element_out)):
+        for on_probes in (True, False):
+            chosen = [r for r, probes_only in results.items() if probes_only == on_probes]
+            if chosen:
+                out += [f"{card}{options}" + (", NSET=PROBES" if on_probes else ""), ", ".join(chosen)]
+    return out
+
+
+def _output_options(dim: int, procedure: str) -> str:
+    """A 2D model's results on its own nodes (not the 3D expansion's); an explicit step's at the
+    case's dt grid (the time points ``GRID``), not at each of its many increments."""
+    return ("" if dim == 3 else ", OUTPUT=2D") + (", TIME POINTS=GRID" if procedure == EXPLICIT else "")
 
 
 def _params(case) -> str:
@@ -232,10 +286,10 @@ def _region_names(case) -> list[str]:
     return names
 
 
-def _sections(case, model: Model) -> list[str]:
+def _sections(case, model: Model, children: int = 1) -> list[str]:
     """The materials and their solid sections: ``MAT`` on every element (``EALL``), or with
     regions one ``*MATERIAL`` and one ``*SOLID SECTION`` on an ``*ELSET`` per material (an
-    element set without elements is left out)."""
+    element set without elements is left out); ``children``: deck elements per reference cell."""
     thickness = "" if model.dim == 3 else "\n1."  # plane strain: per unit thickness; axisymmetric: ignored
     if not case.regions:
         return _material(case.material, "MAT") + [f"*SOLID SECTION, ELSET=EALL, MATERIAL=MAT{thickness}"]
@@ -244,7 +298,8 @@ def _sections(case, model: Model) -> list[str]:
     for k, (mat, material, elset) in enumerate(zip(case.materials, ["MAT"] + [f"MAT_{n}" for n in names],
                                                    ["EBASE"] + [f"E_{n}" for n in names])):
         out += _material(mat, material)
-        elements = np.flatnonzero(model.material_index == k) + 1
+        cells = np.flatnonzero(model.material_index == k)
+        elements = (cells[:, None] * children + np.arange(children)).ravel() + 1
         if elements.size:
             out += [f"*ELSET, ELSET={elset}", *_rows(elements),
                     f"*SOLID SECTION, ELSET={elset}, MATERIAL={material}{thickness}"]

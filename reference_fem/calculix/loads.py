@@ -164,17 +164,19 @@ def _layer_times(ends, load, ring: bool, t_end: float) -> np.ndarray:
     return t[np.concatenate([[True], np.diff(t) > SAME * t_end])]
 
 
-def force_cards(case, model, cells: np.ndarray, amplitudes: Amplitudes) -> list[str]:
+def force_cards(case, model, amplitudes: Amplitudes, to_deck) -> list[str]:
     """``*CLOAD`` nodal forces of the case's force terms (body forces, tractions): the
-    reference's assembled vector of each term on the serendipity nodes, under its amplitude
-    (``STEPLOAD`` without one); a supported dof's force is left out (a reaction there)."""
+    reference's assembled vector of each term moved onto the deck's nodes by ``to_deck``
+    (``(n_nodes, dim) -> (n_nodes, dim)``: :func:`serendipity_forces`, or none for a deck on
+    every node), under its amplitude (``STEPLOAD`` without one); a supported dof's force is
+    left out (a reaction there)."""
     lines = []
     fixed = np.zeros(model.basis.N, bool)
     fixed[model.fixed] = True
     for i, term in enumerate(case.forces, 1):
         _, F = model.force_vector(term)
         F = np.where(fixed, 0.0, F).reshape(-1, model.dim)
-        F = serendipity_forces(F, cells, model.dim) * (CAX_CIRCUMFERENCE if model.rep == AXISYMMETRIC else 1.0)
+        F = to_deck(F) * (CAX_CIRCUMFERENCE if model.rep == AXISYMMETRIC else 1.0)
         name = "STEPLOAD" if term.amplitude is None else amplitudes.name(term.amplitude.points, f"FORCE{i}")
         node, comp = np.nonzero(np.abs(F) > SAME * np.abs(F).max())
         if node.size:  # a force on supported dofs only is all reaction

@@ -32,7 +32,8 @@ from cases.result import RunResult
 
 from ..frames import body_point_to_mesh, body_rotation
 from ..probes import body_mean_row
-from .deck import Deck, build_deck, fixed_increments
+from .deck import Deck, build_deck
+from .procedures import EXPLICIT, IMPLICIT, MODAL, MODES, fixed_increments
 from .frd import read_frd, read_sta
 from .serendipity import once, shares
 
@@ -65,24 +66,27 @@ def find_ccx() -> str:
     return found
 
 
-def solve(case, progress: Callable[[int, int], None] | None = None,
-          workdir: Path | None = None) -> RunResult:
-    """Run ``case`` in CalculiX (the reference mesh, the case's dt and window, one thread).
+def solve(case, progress: Callable[[int, int], None] | None = None, workdir: Path | None = None,
+          procedure: str = IMPLICIT, modes: int | None = None) -> RunResult:
+    """Run ``case`` in CalculiX (the reference mesh, the case's window, one thread) by
+    ``procedure`` (:mod:`.procedures`: ``implicit`` at the case's dt, ``explicit`` at ccx's
+    Courant increment, ``modal`` with ``modes`` modes at the case's dt); what a procedure cannot
+    take is refused in one line (:class:`UnsupportedCase`) before ccx runs.
 
     ``cpu_time_s`` is ccx's own CPU time (its model, factorizations and increments), as the
     other solvers count theirs; making the deck and reading the results are not in it.
     ``workdir`` keeps ccx's files there (else a temporary directory).
     """
     newmark_only(case, "calculix")
-    ccx = find_ccx()
-    if case.wall is not None:
+    if case.wall is not None and procedure == IMPLICIT:
         raise UnsupportedCase(WALL_REFUSED)
-    deck = build_deck(case)
+    deck = build_deck(case, procedure=procedure, modes=modes, fields=False)
+    ccx = find_ccx()
     with tempfile.TemporaryDirectory(prefix="smfem-ccx-") as tmp:
         work = Path(workdir or tmp)
         work.mkdir(parents=True, exist_ok=True)
         (work / "job.inp").write_text(deck.text)
-        cpu, log = run(ccx, work, case.n_steps, progress)
+        cpu, log = run(ccx, work, case, progress)
         result = read_results(case, deck, work, log)
     result.cpu_time_s = cpu
     result.info["ccx"] = ccx
@@ -98,7 +102,7 @@ def read_results(case, deck: Deck, work: Path, log: str = "") -> RunResult:
     increments = read_sta(work / "job.sta") if (work / "job.sta").exists() else []
     # the increments every result block has (a failed run's last one may be cut short)
     n_inc = min(len(b) for b in blocks.values()) if blocks else 0
-    ccx_t = np.array([0.0] + [blocks["DISP"][k][0] for k in range(n_inc)])
+    ccx_t = np.array([0.0] + [block[0] for block in next(iter(blocks.values()), [])[:n_inc]])
     fields_at = _Fields(deck, case, {name: [b[1:] for b in bs[:n_inc]] for name, bs in blocks.items()})
     ccx_history = {p.name: np.array([fields_at.initial(p)] + [fields_at.value(p, k) for k in range(n_inc)])
                    for p in case.probes}
@@ -113,18 +117,38 @@ def read_results(case, deck: Deck, work: Path, log: str = "") -> RunResult:
     converged = n_done == case.n_steps
     message = "" if converged else (f"calculix: stopped at t = {ccx_t[-1]:.6g} s, step {n_done} of {case.n_steps}: "
                                     f"{_last_error(log)}")
-    info = {"element": deck.element, "n_elements": int(deck.cells.shape[0]),
-            "dim": int(deck.points.shape[0]), "representation": deck.model.rep, "increments": n_inc,
-            "time_step": "dt" if fixed_increments(case) else "ccx's own, at most dt, interpolated onto the dt grid"}
+    eigen = [line.strip() for line in log.splitlines() if EIGEN_FAILED.search(line)]
+    if eigen:  # ccx 2.20 goes on with zero modes, and writes zero histories as if all were well
+        converged, message = False, (f"calculix (modal): ccx's eigensolver failed ({eigen[0]}): too many modes for "
+                                     "this mesh; take fewer")
+    info = {"procedure": deck.procedure, "element": deck.element, "n_elements": int(deck.elements.shape[0]),
+            "dim": int(deck.points.shape[0]), "representation": deck.model.rep, "increments": len(increments),
+            "time_step": "ccx's own, at most dt, interpolated onto the dt grid" if deck.procedure == IMPLICIT
+            and not fixed_increments(case) else TIME_STEP[deck.procedure]}
+    if deck.procedure == MODAL:
+        info["modes"] = _modes(deck.text)
     if case.material.plastic:
         info["peps"] = PEEQ_NOTE
-    n_nodes = len(np.unique(deck.cells[:, : deck.corner_count]))
-    return RunResult(t=t, history=history, n_dof=n_nodes * deck.points.shape[0], iterations=[int(i) for i in iterations],
-                     converged=bool(converged), message=message, info=info)
+    return RunResult(t=t, history=history, n_dof=deck.nodes.size * deck.points.shape[0],
+                     iterations=[int(i) for i in iterations], converged=bool(converged), message=message, info=info)
 
 
-def run(ccx: str, work: Path, n_steps: int, progress=None) -> tuple[float, str]:
-    """Run ccx on ``work/job.inp`` with one thread; its CPU time and its output."""
+#: ccx's eigensolver (ARPACK's d[n,s]aupd / d[n,s]eupd) did not give the modes asked for
+EIGEN_FAILED = re.compile(r"\*ERROR in d\[n,s\][ae]upd")
+#: how each procedure steps, for ``info['time_step']`` (the plastic implicit runs' own increments aside)
+TIME_STEP = {IMPLICIT: "dt", MODAL: "dt (each mode exact under piecewise-linear loads)",
+             EXPLICIT: "ccx's own (Courant), the results at the dt grid"}
+
+
+def _modes(text: str) -> int:
+    """The mode count of a modal deck (the line after ``*FREQUENCY``)."""
+    lines = text.splitlines()
+    return int(lines[lines.index("*FREQUENCY, STORAGE=YES") + 1])
+
+
+def run(ccx: str, work: Path, case, progress=None) -> tuple[float, str]:
+    """Run ccx on ``work/job.inp`` with one thread; its CPU time and its output; ``progress(step,
+    n_steps)`` from the step time of each increment ccx reports."""
     env = dict(os.environ, OMP_NUM_THREADS="1", CCX_NPROC_STIFFNESS="1", CCX_NPROC_EQUATION_SOLVER="1")
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     out = []
@@ -132,9 +156,9 @@ def run(ccx: str, work: Path, n_steps: int, progress=None) -> tuple[float, str]:
                           stderr=subprocess.STDOUT, text=True) as proc:
         for line in proc.stdout:
             out.append(line)
-            m = re.match(r"\s*increment\s+(\d+)\s+attempt", line)
+            m = re.match(r"\s*actual (?:step )?time\s*=\s*(\S+)", line)
             if m and progress:
-                progress(min(int(m.group(1)), n_steps), n_steps)
+                progress(min(int(float(m.group(1)) / case.dt + 0.5), case.n_steps), case.n_steps)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return cpu, "".join(out)
@@ -201,7 +225,9 @@ class _Fields:
         """Mass-weighted mean of a body component (consistent mass of the completed field)."""
         if probe.component not in self._mass_rows:
             self._mass_rows[probe.component] = body_mean_row(self.deck.model, probe.component[0])
-        full = complete(self.deck.cells, nodal[:, : self.dim].copy(), self.dim)
+        full = nodal[:, : self.dim].copy()
+        if self.deck.serendipity:
+            full = complete(self.deck.cells, full, self.dim)
         return float(self._mass_rows[probe.component] @ full.ravel())
 
 

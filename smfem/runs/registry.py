@@ -7,7 +7,9 @@ The names are the ones the studies and ``summary.json`` use: ``smfem``, ``refere
 ``smfem-quad9`` (SMFEM with its quadratic section element, ``element=quad9``),
 ``reference-3d`` (the reference FEM with ``dim`` set), ``reference`` (the reference at the
 case's own ``dim``), ``reference-modal`` (the reference's harmonic model, exact in time) and
-``calculix`` (CalculiX on the reference mesh, at the case's ``dim``; needs ``ccx`` on PATH) and
+``calculix`` (CalculiX on the reference mesh, at the case's ``dim``; needs ``ccx`` on PATH;
+its implicit procedure unless told otherwise), ``calculix-explicit`` and ``calculix-modal``
+(CalculiX with its procedure fixed: a study's series each, one row of the headline) and
 ``reference-explicit`` (the reference's mesh and element, central differences on a lumped
 mass at the case's ``dim``: the truth engine of plastic and contact scenes).
 Each solver is imported only when it runs, so ``smfem run`` does not load the reference.
@@ -24,6 +26,8 @@ from cases.result import RunResult
 
 SMFEM, REFERENCE, REF2D, REF3D, MODAL = "smfem", "reference", "reference-2d", "reference-3d", "reference-modal"
 CALCULIX, EXPLICIT = "calculix", "reference-explicit"
+#: CalculiX with its ``procedure`` fixed (:attr:`Solver.options_fixed`): a study's series of their own
+CALCULIX_EXPLICIT, CALCULIX_MODAL = "calculix-explicit", "calculix-modal"
 #: SMFEM with the 9-node section element (:mod:`smfem.quad9`): a study's series of its own
 SMFEM_QUAD9 = "smfem-quad9"
 
@@ -32,6 +36,11 @@ SMFEM_QUAD9 = "smfem-quad9"
 #: (``contact``), and body forces, tractions and a material varying along x3 (``forces``)
 FIELDS, FRAMES, PLASTICITY, CONTACT, FORCES = "fields", "frames", "plasticity", "contact", "forces"
 EVERYTHING = frozenset((FIELDS, FRAMES, PLASTICITY, CONTACT, FORCES))
+
+
+def _anywhere() -> bool:
+    """A solver that runs no external program is installed wherever smfem is."""
+    return True
 
 
 @dataclass(frozen=True)
@@ -49,6 +58,11 @@ class Solver:
     fixes : other case parameters the name fixes, ``(key, value)`` pairs (SMFEM's quadratic
         element: ``(("element", "quad9"),)``): a series of its own in a study, with the same
         numerics as its family's entry
+    options_fixed : solver options the name fixes, ``(key, value)`` pairs (CalculiX's
+        ``procedure``): a series of its own in a study, and one row with its family's in the
+        report's headline (:func:`headline_name`), where a cell names its :attr:`variant`
+    variant : the word that tells it from its family's other entries in a cell they share
+        (default: the values of :attr:`options_fixed`)
     packages : the packages whose sources decide its results besides ``cases`` and ``runs``
         (a change to them reruns its cached runs, :func:`smfem.studies.cache.code_version`)
     supports : of :data:`EVERYTHING`. :func:`solve` refuses ``forces`` where it is missing (the
@@ -73,6 +87,8 @@ class Solver:
     checks : ``checks() -> dict``: the solver's own numerical checks by name (the stability
         study's: ``static_probes(case)``, and SMFEM's ``explicit_limit``, ``free_vibration``,
         ``stiffness_condition``), imported only when asked
+    installed : ``installed() -> bool``: the external program it runs is on this machine (a plan
+        leaves out what cannot run here)
     """
 
     name: str
@@ -80,6 +96,8 @@ class Solver:
     family: str = ""
     dim: int | None = None
     fixes: tuple = ()
+    options_fixed: tuple = ()
+    variant: str = ""
     packages: tuple[str, ...] = ("reference_fem",)
     supports: frozenset = EVERYTHING
     label: str = ""
@@ -94,6 +112,7 @@ class Solver:
     options: Callable[[], dict] = dict
     make_options: Callable[[dict], object] = dict
     checks: Callable[[], dict] = dict
+    installed: Callable[[], bool] = _anywhere
 
     def __post_init__(self):
         if not self.supports <= EVERYTHING:
@@ -103,11 +122,17 @@ class Solver:
         object.__setattr__(self, "family", self.family or self.name)
         object.__setattr__(self, "label", self.label or self.name)
         object.__setattr__(self, "prose", self.prose or self.label)
+        object.__setattr__(self, "variant", self.variant or " ".join(str(v) for _, v in self.options_fixed))
 
     @property
     def fixed(self) -> dict:
         """The case parameters the name fixes (``dim`` and :attr:`fixes`)."""
         return ({} if self.dim is None else {"dim": self.dim}) | dict(self.fixes)
+
+    @property
+    def fixed_options(self) -> dict:
+        """The solver options the name fixes (:attr:`options_fixed`)."""
+        return dict(self.options_fixed)
 
     @property
     def style(self) -> dict:
@@ -171,6 +196,21 @@ def named_for(solver: str, case) -> str:
                  and all(params.get(k) == v for k, v in s.fixed.items())), entry.name)
 
 
+def split_level(solver: str | Solver, level: dict) -> tuple[dict, dict]:
+    """A study level's case overrides and the solver's own options (the keys its
+    :attr:`Solver.options` name: CalculiX's ``modes``), apart."""
+    own = _entry(solver).options()
+    return ({k: v for k, v in level.items() if k not in own}, {k: v for k, v in level.items() if k in own})
+
+
+def headline_name(solver: str) -> str:
+    """The row of the report's headline a solver's series counts in: its family's for an entry
+    that fixes only solver options (CalculiX's procedures: one competitor, at its cheapest), its
+    own otherwise (SMFEM's elements, the 2D and 3D reference: rows of their own)."""
+    entry = lookup(solver)
+    return entry.family if entry.options_fixed and not entry.fixed else entry.name
+
+
 def checks(solver: str | Solver) -> dict:
     """The solver's own numerical checks by name (:attr:`Solver.checks`)."""
     return _entry(solver).checks()
@@ -192,6 +232,8 @@ def solve(solver: str | Solver, case, progress: Callable[[int, int], None] | Non
     ``step_divisor``)."""
     entry = _entry(solver)
     case = with_fixed(entry, case)
+    if entry.options_fixed:
+        options = _with_fixed_options(entry, options or {})
     if FORCES not in entry.supports and (case.forces or case.variation):
         from cases import UnsupportedCase
 
@@ -199,6 +241,14 @@ def solve(solver: str | Solver, case, progress: Callable[[int, int], None] | Non
                               f"reference FEM so far, not by {entry.name}")
     result = entry.run(case, progress=progress, fields=fields, every=every, options=options)
     return result if fields or result.mesh is None else replace(result, mesh=None)
+
+
+def _with_fixed_options(entry: Solver, options: dict) -> dict:
+    """``options`` with those the entry fixes; another value for one of them is refused in one line."""
+    for key, value in entry.options_fixed:
+        if options.get(key, value) != value:
+            raise ParameterError(f"{entry.name} runs with {key}={value}, not {key}={options[key]}")
+    return options | entry.fixed_options
 
 
 # -- how each solver runs: its module imported only then ---------------------------------------
@@ -230,7 +280,17 @@ def _modal(case, progress, fields, every, options) -> RunResult:
 def _calculix(case, progress, fields, every, options) -> RunResult:
     from reference_fem.calculix import solve as calculix
 
-    return calculix(case, progress=progress)
+    return calculix(case, progress=progress, **(options or {}))
+
+
+def _ccx_installed() -> bool:
+    """``ccx`` is on PATH or at ``SMFEM_CCX`` (CalculiX's own lookup, imported when asked)."""
+    from reference_fem.calculix import CalculixMissing, find_ccx
+
+    try:
+        return bool(find_ccx())
+    except CalculixMissing:
+        return False
 
 
 def _smfem_options() -> dict:
@@ -272,6 +332,14 @@ _REFERENCE_OPTIONS = {
     "linear_solver": Spec(str, choices=("auto", "superlu", "pcg"),
                           help="Newton tangents: CG on the elastic factors (pcg), factorized (superlu), or auto"),
 }
+#: CalculiX's own options (reference_fem.calculix.procedures' names and bounds, written here as the
+#: reference's are)
+_CALCULIX_OPTIONS = {
+    "procedure": Spec(str, choices=("implicit", "explicit", "modal"),
+                      help="ccx's procedure: *DYNAMIC (implicit, the default), *DYNAMIC, EXPLICIT (linear elements, "
+                           "lumped mass, ccx's Courant increment) or *FREQUENCY then *MODAL DYNAMIC (modal)"),
+    "modes": Spec(int, 1, 20000, help="the modal procedure's mode count (default 100; fewer than the mesh's free dofs)"),
+}
 _EXPLICIT_OPTIONS = {
     **_ELEMENT_OPTIONS,
     "step_divisor": Spec(int, 1, 1000, help="divides the explicit step (a time ladder)"),
@@ -301,8 +369,16 @@ register(Solver(REF3D, **_ON_A_MESH, dim=3, label="reference FEM 3D", color="C2"
                 prose="the 3D reference", command_line=False, dear=True))
 register(Solver(MODAL, _modal, supports=frozenset(), label="reference FEM, harmonic model", color="C5", marker="v",
                 harmonics=True, command_line=False, series=False))
-register(Solver(CALCULIX, _calculix, supports=frozenset((PLASTICITY, FORCES)), label="CalculiX", color="C4", marker="D",
-                prose="CalculiX", dear=True))
+_CCX = dict(run=_calculix, family=CALCULIX, color="C4", dear=True, options=partial(dict, _CALCULIX_OPTIONS),
+            make_options=partial(checked, specs=_CALCULIX_OPTIONS), installed=_ccx_installed)
+register(Solver(CALCULIX, **_CCX, supports=frozenset((PLASTICITY, FORCES)), label="CalculiX", marker="D",
+                prose="CalculiX", variant="implicit"))
+# its other procedures, series of their own; what each cannot take it refuses itself (modal: plasticity)
+register(Solver(CALCULIX_EXPLICIT, **_CCX, options_fixed=(("procedure", "explicit"),),
+                supports=frozenset((PLASTICITY, FORCES)), label="CalculiX explicit", marker=">",
+                prose="CalculiX's explicit procedure", command_line=False))
+register(Solver(CALCULIX_MODAL, **_CCX, options_fixed=(("procedure", "modal"),), supports=frozenset((FORCES,)),
+                label="CalculiX modal", marker="d", prose="CalculiX's modal procedure", command_line=False))
 register(Solver(EXPLICIT, _explicit, supports=EVERYTHING - {FORCES}, label="reference FEM, explicit", color="C6",
                 marker="P", series=False, options=partial(dict, _EXPLICIT_OPTIONS),
                 make_options=partial(checked, specs=_EXPLICIT_OPTIONS)))

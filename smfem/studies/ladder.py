@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass
 
 from cases import get_case
-from smfem.runs.registry import lookup, with_fixed
+from smfem.runs.registry import lookup, split_level, with_fixed
 
 from . import metrics
 from .cache import Run
@@ -23,13 +23,16 @@ from .plan import Series
 
 def work(params: dict, per_harmonic: bool) -> float:
     """What a run's CPU time grows with, in the case's parameters: the section's (or body's)
-    elements, ``refine ** dim`` over ``coarsen ** dim``, the steps, ``t_end / dt``, and for a
-    harmonic solver the harmonics. An estimate for predicting a ladder's next run from its last
-    (direct solvers grow faster than this with a 3-D mesh, a plastic run with its iterations)."""
+    elements, ``refine ** dim`` over ``coarsen ** dim``, the steps, ``t_end / dt``, for a
+    harmonic solver the harmonics, and the square of a modal run's ``modes`` (ccx's eigen-solve
+    grows about so: benchmarks/README.md; a solver option, passed in ``params`` beside the
+    case's). An estimate for
+    predicting a ladder's next run from its last (direct solvers grow faster than this with a
+    3-D mesh, a plastic run with its iterations, an explicit one with its Courant increment)."""
     dim = params.get("dim", 2)
     cells = (params.get("refine", 1) / params.get("coarsen", 1)) ** dim
     harmonics = max(params.get("harmonics", 1), 1) if per_harmonic else 1
-    return cells * harmonics * params["t_end"] / params["dt"]
+    return cells * harmonics * params.get("modes", 1) ** 2 * params["t_end"] / params["dt"]
 
 
 @dataclass
@@ -51,7 +54,9 @@ class Ladder:
         (:func:`work`; the plan's order among equals). ``job(solver, level, options)``: the
         study's job of a level (:func:`smfem.studies.study.job_of`)."""
         per_harmonic = lookup(series.solver).harmonics
-        params = [with_fixed(series.solver, get_case(name, {**base, **level})).params for level in series.levels]
+        split = [split_level(series.solver, level) for level in series.levels]
+        params = [with_fixed(series.solver, get_case(name, {**base, **overrides})).params | own
+                  for overrides, own in split]
         order = sorted(range(len(params)), key=lambda i: work(params[i], per_harmonic))
         return cls(series, get_case(name, base), truth,
                    [job(series.solver, series.levels[i], series.options) for i in order], [params[i] for i in order])

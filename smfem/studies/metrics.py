@@ -125,7 +125,8 @@ class Cost:
 
     ``how``: ``'reached'`` (``cpu`` s, the CPU time of the cheapest run below the target, and
     ``label``, its settings), ``'not reached'`` (``cpu`` = the dearest run's time, ``best`` =
-    the smallest error), ``'truth not fine enough'`` (the target is below :data:`TRUTH_MARGIN`
+    the smallest error, ``label`` empty or the series a shared cell names),
+    ``'truth not fine enough'`` (the target is below :data:`TRUTH_MARGIN`
     times the truth's uncertainty: no run can be said to reach it) or ``'no run'``.
     """
 
@@ -139,7 +140,7 @@ class Cost:
         if self.how == REACHED:
             return f"{self.cpu:.3g} ({self.label})"
         if self.how == NOT_REACHED:
-            return f"not reached (best {100 * self.best:.2g} %)"
+            return f"not reached (best {100 * self.best:.2g} %{', ' + self.label if self.label else ''})"
         return self.how
 
 

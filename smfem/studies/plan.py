@@ -1,7 +1,8 @@
 """What a study runs: per case, series of runs (one per solver) over space and time levels,
 the run that the same-dt (spatial) comparison measures against, and how the truth is made.
 
-A level is a dict of ``--set`` overrides (``refine``, ``harmonics``, ``dt``); every run of a
+A level is a dict of ``--set`` overrides (``refine``, ``harmonics``, ``dt``) and of the solver's
+own options (CalculiX's ``modes``: :func:`smfem.runs.registry.split_level`); every run of a
 case also gets the case study's ``base`` overrides (a shorter window for a tiny study, say).
 A series spans the mesh (and harmonics) and the time step together, so that its
 work-precision front is that of the total error (:mod:`reports.analysis`).
@@ -12,7 +13,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from cases import ParameterError, get_case
-from smfem.runs.registry import CALCULIX, EXPLICIT, MODAL, REF2D, REF3D, REFERENCE, SMFEM, SMFEM_QUAD9, lookup, solvers
+from smfem.runs.registry import (CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, EXPLICIT, MODAL, REF2D, REF3D, REFERENCE,
+                                 SMFEM, SMFEM_QUAD9, lookup, solvers)
 
 #: the ``--set`` keys that make a level
 RESOLUTION_KEYS = ("refine", "coarsen", "harmonics", "dt")
@@ -65,7 +67,7 @@ class Series:
 
 def series_solvers() -> tuple[str, ...]:
     """The solvers a study may have series of, in the table's order (the modal and explicit
-    solutions make truths only; CalculiX, optional, runs once per case at the case's settings)."""
+    solutions make truths only; CalculiX, optional, a series per procedure)."""
     return tuple(s.name for s in solvers() if s.series)
 
 
@@ -191,6 +193,34 @@ def _s(solver, *levels, until: Until | None = None, **options):
     return Series(solver, tuple(levels), tuple(sorted(options.items())), until)
 
 
+#: CalculiX's modal levels: meshes x modes (its truncation measured like any other parameter);
+#: two meshes, as the truncation holds the error far past r1's mesh error (benchmarks/README.md)
+CCX_MODAL = tuple({"refine": r, "modes": m} for r in (1, 2) for m in (50, 100, 200, 400, 800))
+#: CalculiX's explicit levels: meshes (its increment is ccx's own, from the Courant limit)
+CCX_EXPLICIT = tuple({"refine": r} for r in (1, 2, 4))
+
+
+#: the quick report's CalculiX series: its cheapest procedure, modal, at two mode counts
+#: (benchmarks/README.md), where the scene's mesh takes them (the dome's: 50 modes, two meshes)
+QUICK_MODAL = ({"modes": 50}, {"modes": 100})
+
+
+def calculix(explicit: bool = True, modal: bool = True) -> tuple[Series, ...]:
+    """CalculiX's procedures on a scene of the full plan: implicit at the case's settings (ccx's
+    dearest: two factorizations an increment), explicit over the meshes (ccx's own Courant
+    increment, :data:`CCX_EXPLICIT`) and modal over :data:`CCX_MODAL`; a procedure the scene cannot take (``explicit``
+    or ``modal`` False: plasticity, contact, an initial velocity) is one run, refused in the
+    solver's one line, which the report keeps."""
+    return (_s(CALCULIX, {}), _s(CALCULIX_EXPLICIT, *(CCX_EXPLICIT if explicit else ({},))),
+            _s(CALCULIX_MODAL, *(CCX_MODAL if modal else ({},))))
+
+
+def installed(*series: Series) -> tuple[Series, ...]:
+    """``series`` whose solvers' programs are on this machine (the quick report's light CalculiX
+    series: none without ccx)."""
+    return tuple(s for s in series if lookup(s.solver).installed())
+
+
 def grid(case: str, spaces, divisors) -> tuple[dict, ...]:
     """Every space level (dicts of ``refine``/``harmonics``) at every ``dt`` = the case's dt
     over each of ``divisors`` (a divisor below 1: a longer step than the case's)."""
@@ -220,7 +250,8 @@ def _quick_studies() -> tuple[CaseStudy, ...]:
             _s(SMFEM_QUAD9, *grid("dome", _r(1), (1, 2, 4)), *grid("dome", _r(2), (1, 2, 4, 8))),
             _s(REF2D, *grid("dome", _r(1, 2, 4), (1, 2, 4))),
             _s(REF3D, *grid("dome", _r(1), THREE_D)),
-            _s(CALCULIX, {}),
+            # CalculiX: two levels of its cheapest procedure here, modal (benchmarks/README.md)
+            *installed(_s(CALCULIX_MODAL, {"refine": 1, "modes": 50}, {"refine": 2, "modes": 50})),
         ), reference=(REF2D, {"refine": 8}), truth=TruthPlan(MODAL_TRUTH, refine=(1, 2, 4))),
         CaseStudy("thick_cylinder", (
             _s(SMFEM, *grid("thick_cylinder", ({"harmonics": 20}, {"refine": 2, "harmonics": 40},
@@ -237,9 +268,11 @@ def _quick_studies() -> tuple[CaseStudy, ...]:
                *grid("thick_cylinder", ({"harmonics": 80, "time_scheme": "gauss"},), (1, 2, 4)),
                *grid("thick_cylinder", ({"refine": 2, "harmonics": 80, "time_scheme": "gauss"},), (4,))),
             _s(REF2D, *grid("thick_cylinder", _r(1), (1, 2, 4, 8, 16)), *grid("thick_cylinder", _r(2), (1, 2, 4, 8))),
-            # dt / 4 (about 7 CPU s) is where the 3D mesh reaches 5 %; no CalculiX (64 CPU s for 11 %,
-            # neither target: the full report's)
+            # dt / 4 (about 7 CPU s) is where the 3D mesh reaches 5 %
             _s(REF3D, *grid("thick_cylinder", _r(1), (*THREE_D, 4))),
+            # CalculiX: its cheapest procedure here, modal (its other procedures and finer meshes
+            # are the full report's)
+            *installed(_s(CALCULIX_MODAL, *QUICK_MODAL)),
         ), reference=(REF2D, {"refine": 3}),
             truth=TruthPlan(MODAL_TRUTH, refine=(2, 4, 8), harmonics=(160, 320, 640))),
         CaseStudy("notched_cylinder", (
@@ -299,9 +332,9 @@ def _quick_studies() -> tuple[CaseStudy, ...]:
             _s(SMFEM, *grid("flywheel", ({},), (0.25, 0.5, 1))),
         ), reference=None,
             truth=FLYWHEEL_TRUTH),
-        # the loads issue's scenes: light series, no CalculiX (48 and 123 CPU s at the scenes'
-        # settings, past the report's 10 minutes; the full report has it); the notched moving load
-        # (its 2D reference: 20 CPU s a run at refine 1) is the full report's
+        # the loads issue's scenes: light series, CalculiX's modal procedure at 50 and 100 modes
+        # (its implicit one, past the report's 10 minutes, is the full report's); the notched
+        # moving load (its 2D reference: 20 CPU s a run at refine 1) is the full report's
         CaseStudy("layered_cylinder_pulse", (
             # B_ut, the hoop displacement at a patch's edge, needs many harmonics and short steps:
             # r4 H160 at dt / 32 is 0.63 % from the truth (2 CPU s), r2 H40 stops at 2.2 %
@@ -309,11 +342,13 @@ def _quick_studies() -> tuple[CaseStudy, ...]:
                             (1, 2, 4, 8, 16)),
                *grid("layered_cylinder_pulse", ({"refine": 4, "harmonics": 160},), (16, 32))),
             _s(REF2D, *grid("layered_cylinder_pulse", _r(1), (1, 2, 4)), {"refine": 2}),
+            *installed(_s(CALCULIX_MODAL, *QUICK_MODAL)),
         ), reference=(REF2D, {"refine": 2}),
             truth=TruthPlan(MODAL_TRUTH, refine=(1, 2, 4), harmonics=(20, 40, 80))),
         CaseStudy("moving_load", (
             _s(SMFEM, *grid("moving_load", ({"harmonics": 20}, {"harmonics": 60}, {"harmonics": 120}), (0.5, 1, 2, 4))),
             _s(REF2D, *grid("moving_load", _r(1), (0.5, 1, 2)), {"refine": 2}),
+            *installed(_s(CALCULIX_MODAL, *QUICK_MODAL)),
         ), reference=(REF2D, {"refine": 2}),
             truth=TruthPlan(MODAL_TRUTH, refine=(1, 2, 4), harmonics=(60, 120, 240))),
         # the interaction issue's scenes: light series (the full report carries the rest)
@@ -359,7 +394,7 @@ def _full_studies() -> tuple[CaseStudy, ...]:
             _s(SMFEM_QUAD9, *grid("dome", _r(1, 2, 4), (1, 2, 4, 8))),
             _s(REF2D, *grid("dome", _r(1, 2, 4, 8), (1, 2, 4, 8))),
             _s(REF3D, *grid("dome", _r(1), (1, 2, 4)), *grid("dome", _r(2), (1, 2, 4))),
-            _s(CALCULIX, {}),
+            *calculix(),
         ), reference=(REF2D, {"refine": 16}), truth=TruthPlan(MODAL_TRUTH, refine=(2, 4, 8))),
         CaseStudy("thick_cylinder", (
             _s(SMFEM, *grid("thick_cylinder", ({"harmonics": 20}, {"refine": 2, "harmonics": 40},
@@ -374,7 +409,7 @@ def _full_studies() -> tuple[CaseStudy, ...]:
             # dt/16 1.13 %, dt/32 1.15 % (its mesh's limit), r3 dt/32 0.81 % (202 CPU s)
             _s(REF3D, *grid("thick_cylinder", _r(1), (1, 2, 4, 8)), *grid("thick_cylinder", _r(2), (1, 2, 4, 16)),
                *grid("thick_cylinder", _r(3), (16, 32))),
-            _s(CALCULIX, {}),
+            *calculix(),
         ), reference=(REF2D, {"refine": 4}),
             truth=TruthPlan(MODAL_TRUTH, refine=(4, 8, 16), harmonics=(320, 640, 1280))),
         CaseStudy("notched_cylinder", (
@@ -395,7 +430,7 @@ def _full_studies() -> tuple[CaseStudy, ...]:
             # 3.02 % with (193 CPU s); r3 dt / 2 2.70 % (270 s): the issue's 3 %)
             _s(REF3D, *grid("notched_cylinder", _r(1), (0.5, 1, 2, 4)), *grid("notched_cylinder", _r(2, 3), (1, 2)),
                bbar=True),
-            _s(CALCULIX, {}),
+            *calculix(modal=False),
         ), reference=(REF2D, {"refine": 3}),
             truth=explicit_truth(bbar=True)),
         CaseStudy("notched_strip", (
@@ -408,7 +443,7 @@ def _full_studies() -> tuple[CaseStudy, ...]:
                linear_solver="superlu"),
             # 3D to 1 %: r1 2.3 % at every dt (its mesh), r2 dt 1.25 %, dt/2 0.96 % (146 CPU s)
             _s(REF3D, *grid("notched_strip", _r(1), (0.5, 1, 2, 4)), *grid("notched_strip", _r(2), (1, 2))),
-            _s(CALCULIX, {}),
+            *calculix(modal=False),
         ), reference=(REF2D, {"refine": 3}, (("linear_solver", "superlu"),)),
             truth=explicit_truth(bbar=True)),
         CaseStudy("rod_impact", (
@@ -416,7 +451,7 @@ def _full_studies() -> tuple[CaseStudy, ...]:
             _s(SMFEM_QUAD9, *grid("rod_impact", _r(1, 2, 4), (1, 2, 4, 8))),
             _s(REF2D, *grid("rod_impact", _r(1, 2, 4), (1, 2, 4, 8))),
             _s(REF3D, *grid("rod_impact", _r(1), (0.5, 1, 2, 4))),
-            _s(CALCULIX, {}),
+            *calculix(explicit=False, modal=False),
         ), reference=(REF2D, {"refine": 8}),
             truth=explicit_truth()),
         # contact between bodies: CalculiX refused (its contact pairs stop: the report says why)
@@ -426,7 +461,7 @@ def _full_studies() -> tuple[CaseStudy, ...]:
             _s(SMFEM_QUAD9, *grid("ring_in_ring", ({"harmonics": 20}, {"harmonics": 40}), (2, 4, 8, 16))),
             _s(REF2D, *grid("ring_in_ring", _r(1, 2), (1, 2, 4, 8, 16))),
             _s(REF3D, *grid("ring_in_ring", _r(1), (1, 2, 4, 8))),
-            _s(CALCULIX, {}),
+            *calculix(explicit=False, modal=False),
         ), reference=(REF2D, {"refine": 3}),
             truth=RING_TRUTH),
         # no 3D reference (a section of bodies reaching the axis has no swept form)
@@ -434,7 +469,7 @@ def _full_studies() -> tuple[CaseStudy, ...]:
             _s(SMFEM, *grid("rod_collision", _r(1, 2, 4), (1, 2, 4, 8))),
             _s(SMFEM_QUAD9, *grid("rod_collision", _r(1, 2), (1, 2, 4, 8))),
             _s(REF2D, *grid("rod_collision", _r(1, 2, 4), (1, 2, 4, 8))),
-            _s(CALCULIX, {}),
+            *calculix(explicit=False, modal=False),
         ), reference=(REF2D, {"refine": 4}),
             truth=explicit_truth()),
         CaseStudy("layered_cylinder", (
@@ -447,7 +482,7 @@ def _full_studies() -> tuple[CaseStudy, ...]:
                                           {"refine": 2, "harmonics": 80, "time_scheme": "gauss"}), (1, 2, 4))),
             _s(REF2D, *grid("layered_cylinder", _r(1, 2), (1, 2, 4, 8, 16))),
             _s(REF3D, *grid("layered_cylinder", _r(1), (1, 2, 4))),
-            _s(CALCULIX, {}),
+            *calculix(),
         ), reference=(REF2D, {"refine": 4}),
             truth=TruthPlan(MODAL_TRUTH, refine=(4, 8, 16), harmonics=(320, 640, 1280))),
         CaseStudy("flywheel", (
@@ -464,7 +499,7 @@ def _full_studies() -> tuple[CaseStudy, ...]:
             _s(SMFEM_QUAD9, *grid("layered_cylinder_pulse", ({"harmonics": 40},), (4, 16)),
                *grid("layered_cylinder_pulse", ({"harmonics": 80}, {"harmonics": 160}), (16, 32, 64))),
             _s(REF2D, *grid("layered_cylinder_pulse", _r(1, 2), (1, 2, 4, 8, 16))),
-            _s(CALCULIX, {}),
+            *calculix(),
         ), reference=(REF2D, {"refine": 4}),
             truth=TruthPlan(MODAL_TRUTH, refine=(4, 8, 16), harmonics=(320, 640, 1280))),
         CaseStudy("moving_load", (
@@ -473,7 +508,7 @@ def _full_studies() -> tuple[CaseStudy, ...]:
             _s(SMFEM_QUAD9, *grid("moving_load", ({"harmonics": 120},), (1, 2, 4, 8))),
             _s(REF2D, *grid("moving_load", _r(1, 2, 4), (1, 2, 4, 8))),
             _s(REF3D, *grid("moving_load", _r(1), (1, 2))),
-            _s(CALCULIX, {}),
+            *calculix(),
         ), reference=(REF2D, {"refine": 4}),
             truth=TruthPlan(MODAL_TRUTH, refine=(2, 4, 8), harmonics=(120, 240, 480))),
         CaseStudy("moving_load_notched", (

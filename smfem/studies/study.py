@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 from cases import get_case
 from smfem.runs.progress import Progress
-from smfem.runs.registry import lookup
+from smfem.runs.registry import lookup, split_level
 
 from . import effectivity
 from .cache import Run, RunCache
@@ -67,16 +67,18 @@ def stored_truth(study: CaseStudy) -> tuple[Truth | None, str]:
 
 def job_of(study: CaseStudy):
     """``job(solver, level, options=())``: the study's job of a level (with its series' solver
-    options). The SMFEM run at the case's own settings writes fields.vtu, whichever level
-    resolves to them."""
+    options, and the level's own: CalculiX's ``modes``, :func:`smfem.runs.registry.split_level`).
+    The SMFEM run at the case's own settings writes fields.vtu, whichever level resolves to them."""
     def params(level):
         return get_case(study.case, {**study.base, **level}).params
 
     shown = params({})
 
     def job(solver, level, options=()):
-        return Job.make(study.case, solver, {**study.base, **level}, options=dict(options),
-                        fields=solver == SMFEM and params(level) == shown and not options)
+        overrides, own = split_level(solver, level)
+        options = dict(options) | own
+        return Job.make(study.case, solver, {**study.base, **overrides}, options=options,
+                        fields=solver == SMFEM and params(overrides) == shown and not options)
     return job
 
 

@@ -1,0 +1,57 @@
+"""The plans (smfem/studies/plan.py): CalculiX's procedures in the full plan where each takes the
+scene, refused in one run where it cannot; the quick plan's light CalculiX series only where ccx
+is installed."""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+
+from cases import UnsupportedCase, get_case
+from reference_fem.calculix.procedures import refuse
+from smfem.runs.registry import CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, lookup
+from smfem.studies.plan import CCX_EXPLICIT, CCX_MODAL, FULL_UNTIL, full, quick
+from smfem.studies.study import job_of
+
+PROCEDURES = {CALCULIX_EXPLICIT: "explicit", CALCULIX_MODAL: "modal"}
+
+
+def _takes(case: str, procedure: str) -> bool:
+    try:
+        refuse(get_case(case), procedure, None)
+    except UnsupportedCase:
+        return False
+    return True
+
+
+def test_the_full_plan_carries_each_procedure_that_takes_a_scene_and_keeps_the_refusal_of_the_others():
+    with_ccx = [study for study in full() if any(s.solver == CALCULIX for s in study.series)]
+    assert {study.case for study in with_ccx} >= {"dome", "thick_cylinder", "notched_strip", "layered_cylinder",
+                                                  "layered_cylinder_pulse", "moving_load", "notched_cylinder"}
+    for study in with_ccx:
+        series = {s.solver: s for s in study.series}
+        for solver, procedure in PROCEDURES.items():
+            s = series[solver]
+            if _takes(study.case, procedure):
+                assert s.until == FULL_UNTIL, (study.case, solver)
+                assert s.levels == (CCX_MODAL if procedure == "modal" else CCX_EXPLICIT)
+            else:  # one run, refused in the solver's one line before ccx starts
+                assert s.levels == ({},) and s.until is None, (study.case, solver)
+        modal = [job_of(study)(CALCULIX_MODAL, level) for level in series[CALCULIX_MODAL].levels]
+        assert all(dict(job.options).keys() <= {"modes"} and "modes" not in dict(job.overrides) for job in modal)
+
+
+@pytest.mark.parametrize("found", [True, False])
+def test_the_quick_plan_has_a_light_calculix_series_only_where_ccx_is_found(found, monkeypatch):
+    if found and shutil.which("ccx") is None:
+        pytest.skip("ccx (CalculiX) is not installed")
+    if not found:
+        monkeypatch.setenv("SMFEM_CCX", "no-such-ccx-here")
+    assert lookup(CALCULIX_MODAL).installed() == found
+    light = {study.case: s.levels for study in quick() for s in study.series if s.solver == CALCULIX_MODAL}
+    # two levels of the cheapest procedure, modal (benchmarks/README.md), on the scenes where ccx is cheap
+    two = ({"modes": 50}, {"modes": 100})
+    assert light == ({"dome": ({"refine": 1, "modes": 50}, {"refine": 2, "modes": 50}), "thick_cylinder": two,
+                      "layered_cylinder_pulse": two, "moving_load": two} if found else {})
+    assert not any(s.solver == CALCULIX_EXPLICIT for study in quick() for s in study.series)

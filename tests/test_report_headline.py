@@ -1,0 +1,64 @@
+"""The headline's rows (reports/tables.py): CalculiX's procedures, each a series of its own, share
+one row, at each target the cheapest procedure named in its cell; a procedure that cannot take
+the scene keeps its one line beside the row."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pandas as pd
+
+from reports.analysis import CaseAnalysis, SolverSummary
+from reports.tables import headline_table
+from smfem.runs.registry import CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, REF2D, SMFEM
+from smfem.studies import metrics
+from smfem.studies.jobs import NOT_AVAILABLE, OK
+
+REFUSED = "calculix (modal): a modal superposition is linear: it takes no plasticity"
+
+
+def _series(solver: str, *runs) -> SolverSummary:
+    """A solver's summary from its runs ``(label, cpu s, total error)``."""
+    points = pd.DataFrame([{"label": label, "cpu": cpu, "total": total} for label, cpu, total in runs])
+    costs = {t: metrics.cost_to(t, points.cpu, points.total, points.label) for t in metrics.TARGETS}
+    return SolverSummary(solver, OK, "", points, [], costs)
+
+
+def _analysis(case: str, *series: SolverSummary) -> CaseAnalysis:
+    truth = SimpleNamespace(name="stored", uncertainty_of=lambda probes: 1e-4)
+    return CaseAnalysis(None, SimpleNamespace(name=case, probes=[]), truth, None, pd.DataFrame(),
+                        {s.solver: s for s in series}, pd.DataFrame(), pd.DataFrame())
+
+
+def test_calculix_procedures_share_one_headline_row_at_their_cheapest():
+    elastic = _analysis("dome", _series(SMFEM, ("r1", 0.5, 0.03), ("r2", 2.0, 0.008)),
+                        _series(REF2D, ("r1", 1.0, 0.02), ("r2", 8.0, 0.006)),
+                        _series(CALCULIX, ("r1", 60.0, 0.03)),
+                        _series(CALCULIX_EXPLICIT, ("r1", 40.0, 0.04), ("r2", 300.0, 0.012)),
+                        _series(CALCULIX_MODAL, ("r1 modes 50", 1.0, 0.04), ("r2 modes 50", 10.0, 0.009)))
+    refused = SolverSummary(CALCULIX_MODAL, NOT_AVAILABLE, REFUSED, pd.DataFrame(), [],
+                            {t: metrics.cost_to(t, [], [], []) for t in metrics.TARGETS})
+    plastic = _analysis("strip", _series(SMFEM, ("r1", 1.0, 0.02)), _series(CALCULIX, ("r1", 50.0, 0.05)),
+                        _series(CALCULIX_EXPLICIT, ("r1", 20.0, 0.03)), refused)
+    head = headline_table([elastic, plastic]).set_index(["case", "solver"])
+    assert list(head.loc["dome"].index) == [SMFEM, REF2D, CALCULIX]
+    ccx = head.loc["dome", CALCULIX]
+    assert (ccx.cpu_s_to_1pct, ccx.cpu_s_to_5pct) == ("10 (modal r2 modes 50)", "1 (modal r1 modes 50)")
+    assert (ccx.smfem_speedup_1pct, ccx.runs, round(ccx.best_error_pct, 9)) == ("5x", 5, 0.9)
+    strip = head.loc["strip", CALCULIX]
+    assert (strip.cpu_s_to_1pct, strip.cpu_s_to_5pct) == ("not reached (best 3 %, explicit)", "20 (explicit r1)")
+    assert plastic.left_out() == [f"CalculiX modal: {REFUSED}"] and elastic.left_out() == []
+
+
+def test_a_row_of_refused_procedures_says_the_first_reason_and_lists_the_others():
+    def no(solver, why):
+        return SolverSummary(solver, NOT_AVAILABLE, why, pd.DataFrame(), [],
+                             {t: metrics.cost_to(t, [], [], []) for t in metrics.TARGETS})
+
+    contact = _analysis("rod", _series(SMFEM, ("r1", 1.0, 0.005)), no(CALCULIX, "calculix: a rigid wall"),
+                        no(CALCULIX_EXPLICIT, "calculix (explicit): contact"),
+                        no(CALCULIX_MODAL, "calculix (modal): contact"))
+    row = headline_table([contact]).set_index("solver").loc[CALCULIX]
+    assert row.cpu_s_to_1pct == "not available: a rigid wall"
+    assert contact.left_out() == ["CalculiX explicit: calculix (explicit): contact",
+                                  "CalculiX modal: calculix (modal): contact"]
