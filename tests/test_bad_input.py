@@ -129,6 +129,7 @@ def test_the_reports_bad_input_sweep_refuses_every_value():
         (["run", "notched_strip", "--solver", "calculix", "--set", "procedure=modal"], "takes no plasticity"),
         (["run", "rod_impact", "--solver", "calculix", "--set", "procedure=modal"], "takes no contact"),
         (["run", "rod_impact", "--solver", "calculix", "--set", "procedure=explicit"], "contact is not exported"),
+        (["run", "dome", "--solver", "calculix", "--set", "procedure=explicit"], "axisymmetric"),
         (["run", "dome", "--solver", "calculix", "--set", "modes=20"], "the modal procedure's option"),
         (["run", "dome", "--solver", "calculix", "--set", "procedure=modal", "--set", "modes=0"], "modes"),
         (["run", "dome", "--solver", "calculix", "--set", "procedure=modal", "--set", "modes=5000"], "free dofs"),

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from cases import get_case
+from cases.params import UnsupportedCase
 from reference_fem.calculix import build_deck
 from reference_fem.calculix.linear import split
 from smfem.runs.errors import history_errors
@@ -49,7 +50,8 @@ def test_the_explicit_deck_names_its_increment_and_the_dt_grid():
     assert "*TIME POINTS, NAME=GRID, GENERATE" in explicit.text and "TIME POINTS=GRID" in explicit.text
     # each quadratic face loaded is two linear ones
     assert len(re.findall(r", P\d, ", explicit.text)) == 2 * len(re.findall(r", P\d, ", implicit.text))
-    assert build_deck(get_case("dome"), procedure="explicit").element == "CAX4"
+    with pytest.raises(UnsupportedCase, match="axisymmetric"):  # ccx's wedges collapse the increment
+        build_deck(get_case("dome"), procedure="explicit")
     assert build_deck(get_case("thick_cylinder", {"dim": 3, "t_end": 4e-4}), procedure="explicit").element == "C3D8"
 
 
