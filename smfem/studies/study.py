@@ -15,6 +15,7 @@ from .eta import TimeLeft
 from .executors import run_jobs
 from .jobs import Job
 from .ladder import Ladder
+from .peak_memory import MemoryLimit, PeakMemory
 from .plan import SMFEM, CaseStudy
 from .stored import find as find_stored
 from .truth import Truth, assemble, plan_for
@@ -120,7 +121,8 @@ def run_cached(jobs: list[Job], cache: RunCache, scheduler: str | None = None, w
 
     Returns the runs by job (followed ones too), the jobs executed and how many runs came from
     the cache. ``cached_only``: execute nothing; a run missing from the cache raises
-    :class:`NotInCache`.
+    :class:`NotInCache`. Local workers never start runs together whose predicted peak memory
+    (:mod:`smfem.studies.peak_memory`) passes the machine's available memory.
     """
     follow = follow or (lambda job, run: [])
     found: dict = {}  # cache path -> run
@@ -155,10 +157,13 @@ def run_cached(jobs: list[Job], cache: RunCache, scheduler: str | None = None, w
     left = TimeLeft(cache, workers)
     if progress:
         left.expect(queue)
+    peaks = PeakMemory(cache)
     with Progress(len(queue), "study", "run", enabled=progress) as bar:
-        for done, (job, outcome) in enumerate(run_jobs(queue, scheduler, workers), start=1):
+        for done, (job, outcome) in enumerate(run_jobs(queue, scheduler, workers, MemoryLimit.of_machine(peaks)),
+                                              start=1):
             path = cache.path(job)
             found[path] = cache.store(job, outcome)
+            peaks.learn(job, found[path])
             more = ask([j for waiter in waiting.pop(path) for j in follow(waiter, found[path])])
             queue += more
             if progress:
