@@ -21,6 +21,7 @@ from smfem.studies.plan import REFERENCE, SMFEM
 from smfem.studies.study import StudyResult
 from .blocks import Section, figure, h, items, p, table
 from .scene import scene
+from .timing import timed_runs
 from .verdict import verdict
 
 
@@ -61,6 +62,7 @@ def overview(ctx: ReportContext) -> list[Section]:
             f"machine: {platform.platform()}, {os.cpu_count()} CPUs, Python {platform.python_version()}",
             f"code versions (source hashes): smfem {code_version(SMFEM)}, reference {code_version(REFERENCE)}",
             "tables as CSV: tables/*.csv; per-run files (history.csv, summary.json): the run cache",
+            *_timed(ctx.tables.get("timing")),
         ]),
     ]
     if missing:
@@ -104,6 +106,15 @@ def headline(ctx: ReportContext) -> list[Section]:
         items(["every scene and solver: tables/headline.csv and tables/stresses.csv",
                "every run, order, published extremum and the truth per probe: the appendix, and tables/*.csv"]),
     ], appendix=_timing_table(ctx.tables.get("timing")))]
+
+
+def _timed(timing) -> list[str]:
+    """The timing pass in one line (none without a pass)."""
+    if timing is None or not len(timing):
+        return []
+    runs = timed_runs(timing)
+    return [f"timing pass: {len(runs)} runs behind the headline timed again, {int(runs.repeats.sum())} repeats "
+            f"(tables/timing.csv)"]
 
 
 def _timing_table(timing) -> list:

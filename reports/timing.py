@@ -77,3 +77,8 @@ def speedup_range(an: CaseAnalysis, solver: str, target: float, smfem_cost) -> s
     if other is None or mine is None:
         return ""
     return f"{other.cpu_min / mine.cpu_max:.3g}-{other.cpu_max / mine.cpu_min:.3g}"
+
+
+def timed_runs(timing: pd.DataFrame) -> pd.DataFrame:
+    """The rows of ``tables/timing.csv`` one per run timed (a run can decide both targets)."""
+    return timing.drop_duplicates(["case", "solver", "label"])

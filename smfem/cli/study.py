@@ -54,6 +54,7 @@ def _store_fronts(parser) -> None:
 
 def command(args) -> int:
     """1 if a run failed with an error (the outputs are written all the same), else 0."""
+    from reports.timing import timed_runs
     from smfem import api  # the reports load matplotlib, jinja2, dask: only when asked
     from smfem.studies.executors import SchedulerUnreachable
     from smfem.studies.jobs import FAILED
@@ -85,9 +86,9 @@ def command(args) -> int:
     for line in headline_lines(report.tables["headline"]):
         print(line)
     made = "index.html, report.pdf, " if args.command == "report" else ""
-    timed = report.tables["timing"]
+    timed = timed_runs(report.tables["timing"])
     print(f"{args.command}: {len(report.study.executed)} runs executed, {report.study.cached} cached, "
-          f"{len(timed)} headline costs timed again ({int(timed.repeats.sum())} repeats), "
+          f"{len(timed)} runs timed again ({int(timed.repeats.sum())} repeats), "
           f"{report.wall_time_s:.1f} s -> {out}/ ({made}tables/, figures/)")
     if publish_to:
         from reports.publish import publish

@@ -42,10 +42,18 @@ class PeakMemory:
 
     def __init__(self, cache: RunCache):
         self.cache = cache
-        self.relatives: dict[tuple[str, str], list[_Recorded]] = defaultdict(list)
+        self._relatives: dict[tuple[str, str], list[_Recorded]] | None = None
         self.predicted: dict[Job, float] = {}  # asked at every start, of every job waiting
-        for record in cache.earlier().values():
-            self._add(record["case"], record["solver"], record["params"], record["n_dof"], record["peak_memory_mb"])
+
+    @property
+    def relatives(self) -> dict[tuple[str, str], list[_Recorded]]:
+        """The recorded runs by scene and solver; the cache read when first asked (a study whose
+        runs are all cached starts none)."""
+        if self._relatives is None:
+            self._relatives = defaultdict(list)
+            for record in self.cache.earlier().values():
+                self._add(record["case"], record["solver"], record["params"], record["n_dof"], record["peak_memory_mb"])
+        return self._relatives
 
     def _add(self, case: str, solver: str, params: dict, n_dof, peak_mb) -> None:
         if n_dof and peak_mb:

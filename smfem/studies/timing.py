@@ -119,5 +119,5 @@ def retime(groups: list[list[Job]], rule: TimingRule = TimingRule(), run=in_one_
                     times[job] += cpu
                     spent += sum(cpu)
                 finished = sum(rule.done(t, spent) for t in times.values() if t)
-                bar.update(finished, f"{left[-1].scene}: round {max(len(times[j]) for j in left)}")
+                bar.update(finished, f"{left[-1].scene}: {max(len(times[j]) for j in left)} repeats")
     return {job: Timing(job, tuple(t)) for job, t in times.items()}
