@@ -71,6 +71,8 @@ class CaseAnalysis:
     published: pd.DataFrame
     #: the error estimates against the truth (:mod:`smfem.studies.effectivity`)
     effectivity: pd.DataFrame = field(default_factory=pd.DataFrame)
+    #: (solver, target) -> the timing pass's repeats of its decisive run (:mod:`reports.timing`)
+    timings: dict = field(default_factory=dict)
 
     @property
     def available(self) -> bool:

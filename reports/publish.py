@@ -1,7 +1,7 @@
 """A report's findings kept in the repository (``smfem report --full --publish docs/full-report``):
-``tables/headline.csv``, ``tables/fronts.csv`` and ``tables/carried.csv`` as the run wrote them,
-``run.json`` (when, on what machine, how long, how many runs, the largest run's memory), and the
-page made of them: ``README.md`` (the verdict, the headline and where each carried series
+``tables/headline.csv``, ``tables/fronts.csv``, ``tables/carried.csv`` and ``tables/timing.csv`` as the
+run wrote them, ``run.json`` (when, on what machine, how long, how many runs, the largest run's
+memory), and the page made of them: ``README.md`` (the verdict, the headline and where each carried series
 stopped) with ``work-precision.png`` (the paper's five scenes' fronts). Written by the command
 only, so that what README quotes from it can be made again; ``python -m reports.publish DIR``
 makes the page again from DIR's tables (what ``--publish`` does after copying them)."""
@@ -24,7 +24,7 @@ from .figures import _log_axes
 from .verdict import summary_table, verdict
 
 #: the tables a published report keeps
-PUBLISHED = ("headline", "fronts", "carried")
+PUBLISHED = ("headline", "fronts", "carried", "timing")
 
 
 def _cpu_model() -> str:

@@ -14,7 +14,7 @@ from smfem.studies.jobs import NOT_INSTALLED, OK
 from .analysis import FAMILIES, CaseAnalysis
 from .blocks import Section, figure, figures, h, items, link, p, table
 from .compact import merged
-from .tables import truth_table
+from .tables import RANGE, truth_table
 from .verdict import sentence
 
 #: the solver cell of a row that every solver's answer shares
@@ -27,7 +27,8 @@ def cost_labels(df: pd.DataFrame) -> dict:
     for column in df.columns:
         for prefix, text in (("cpu_s_to_", "CPU s to {} (settings)"), ("smfem_speedup_", "SMFEM speed-up at {}")):
             if column.startswith(prefix):
-                out[column] = text.format(column[len(prefix):].replace("pct", " %"))
+                target = column[len(prefix):].removesuffix(RANGE).replace("pct", " %")
+                out[column] = "its range over repeats" if column.endswith(RANGE) else text.format(target)
     return out
 
 

@@ -19,8 +19,9 @@ from smfem.studies.effectivity import summary as effectivity_summary
 from smfem.studies.metrics import TARGETS, TRUTH_MARGIN
 from smfem.studies.plan import REFERENCE, SMFEM
 from smfem.studies.study import StudyResult
-from .blocks import Section, figure, items, p, table
+from .blocks import Section, figure, h, items, p, table
 from .scene import scene
+from .timing import timed_runs
 from .verdict import verdict
 
 
@@ -61,6 +62,7 @@ def overview(ctx: ReportContext) -> list[Section]:
             f"machine: {platform.platform()}, {os.cpu_count()} CPUs, Python {platform.python_version()}",
             f"code versions (source hashes): smfem {code_version(SMFEM)}, reference {code_version(REFERENCE)}",
             "tables as CSV: tables/*.csv; per-run files (history.csv, summary.json): the run cache",
+            *_timed(ctx.tables.get("timing")),
         ]),
     ]
     if missing:
@@ -73,8 +75,9 @@ def verdict_section(ctx: ReportContext) -> list[Section]:
     return [Section("verdict", "Verdict", [
         items(verdict(ctx.tables["headline"])),
         p(f"Total error: {HEADLINE_MEASURE}, against each scene's truth; speed-ups are CPU-time ratios at "
-          "the same error, on one thread ('more than': the other solver does not reach the target in this "
-          "study). Each scene's section has every solver's cost and its work-precision diagram."),
+          "the same error, on one thread, of each run's minimum over the timing pass's repeats ('more than': the "
+          "other solver does not reach the target in this study). Each scene's section has every solver's cost and "
+          "its work-precision diagram."),
     ])]
 
 
@@ -90,8 +93,11 @@ def headline(ctx: ReportContext) -> list[Section]:
           f"{TRUTH_MARGIN:g} times the truth's uncertainty is 'truth not fine enough': no run can be said to reach it. "
           "SMFEM's speed-up is that solver's CPU time over SMFEM's at the same target ('>' when the solver does not "
           "reach it even at its dearest run, '<' when SMFEM does not). CPU time is the solve's process time (model "
-          "building, factorization, time stepping), one thread. A reason in a cell is a numbered note under its "
-          "table."),
+          "building, factorization, time stepping), one thread. The runs within a target were timed again after "
+          "the study, one at a time with nothing else running, SMFEM's and the other's by turns (the timing pass, "
+          "tables/timing.csv): their CPU time is the minimum over the repeats and each speed-up a ratio of minima, "
+          "with its range over the repeats beside it (the other's fastest over SMFEM's slowest to the other's "
+          "slowest over SMFEM's fastest). A reason in a cell is a numbered note under its table."),
         p("Stresses and plastic strains have rows of their own in each scene, outside the headline measure: each "
           "family judged on its own (max over its probes of the relative max-norm error) and against its own "
           f"targets ({targets}): a stress at a wave front or a plastic strain at a yielding point converges more "
@@ -99,7 +105,25 @@ def headline(ctx: ReportContext) -> list[Section]:
           "truth, say), it is one row."),
         items(["every scene and solver: tables/headline.csv and tables/stresses.csv",
                "every run, order, published extremum and the truth per probe: the appendix, and tables/*.csv"]),
-    ])]
+    ], appendix=_timing_table(ctx.tables.get("timing")))]
+
+
+def _timed(timing) -> list[str]:
+    """The timing pass in one line (none without a pass)."""
+    if timing is None or not len(timing):
+        return []
+    runs = timed_runs(timing)
+    return [f"timing pass: {len(runs)} runs behind the headline timed again, {int(runs.repeats.sum())} repeats "
+            f"(tables/timing.csv)"]
+
+
+def _timing_table(timing) -> list:
+    """The timing pass's repeats per decisive run (none without a pass)."""
+    if timing is None or not len(timing):
+        return []
+    shown = timing.assign(target=[f"{100 * t:g} %" for t in timing.target])
+    return [h("The timing pass: the runs within each target timed again (tables/timing.csv)"),
+            table(shown.round({"cpu_min_s": 4, "cpu_median_s": 4, "cpu_max_s": 4, "study_cpu_s": 4}))]
 
 
 def estimates(ctx: ReportContext) -> list[Section]:

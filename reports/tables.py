@@ -12,16 +12,25 @@ from smfem.runs.registry import lookup
 
 from smfem.studies import metrics
 from .analysis import FAMILIES, HEADLINE_MEASURE, CaseAnalysis
+from .timing import COLUMNS as TIMING_COLUMNS
+from .timing import speedup_range
 from smfem.studies.calibration import FLOOR, SHARPNESS
 from smfem.studies.calibration import table as calibration_table
 from smfem.studies.effectivity import BAND
 from smfem.studies.jobs import NOT_INSTALLED, OK
 from smfem.studies.plan import SMFEM
+from smfem.studies.timing import TimingRule
 from smfem.studies.truth import PARTS
 
 
 def _pct(target: float) -> str:
     return f"{100 * target:g}pct"
+
+
+#: the timing pass's rule as tables/README.txt states it (the budget is an option)
+RULE = TimingRule()
+#: the suffix of a speed-up's column that holds its range over the timing pass's repeats
+RANGE = "_range"
 
 
 def runs_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
@@ -93,8 +102,9 @@ def inside_model(validity: dict | None) -> str:
 def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | None,
                   no_truth: str | None = None) -> dict:
     """CPU time to each target (with its settings) and SMFEM's speed-up there (against
-    ``mine``, SMFEM's best element at each target; none on SMFEM's own rows); ``no_truth``: why
-    the probes have no truth although the case has one."""
+    ``mine``, SMFEM's best element at each target; none on SMFEM's own rows), beside it its range
+    over the timing pass's repeats (:func:`reports.timing.speedup_range`, where both sides were
+    timed); ``no_truth``: why the probes have no truth although the case has one."""
     row = {}
     for k, (target, cost) in enumerate(costs.items()):
         if s.status != OK:  # the reason once, in the first target's cell, without the solver's name
@@ -109,6 +119,7 @@ def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | No
         if lookup(solver).family != SMFEM and s.status == OK and mine is not None:
             speed = metrics.speedup(cost, mine[target])
         row[f"smfem_speedup_{_pct(target)}"] = speed
+        row[f"smfem_speedup_{_pct(target)}{RANGE}"] = speedup_range(an, solver, target, cost, mine[target]) if speed else ""
     return row
 
 
@@ -193,8 +204,9 @@ def carried_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["case", "solver", "runs", "levels", "outcome"])
 
 
-def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFrame]:
-    """Write ``out/*.csv`` and return the tables by name."""
+def write_tables(analyses: list[CaseAnalysis], out: Path, timing: pd.DataFrame | None = None) -> dict[str, pd.DataFrame]:
+    """Write ``out/*.csv`` and return the tables by name; ``timing``: the timing pass's rows
+    (:func:`reports.timing.time_headline`, already in the analyses' costs; None: no pass)."""
     out.mkdir(parents=True, exist_ok=True)
     tables = {
         "headline": headline_table(analyses),
@@ -209,6 +221,7 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "effectivity": effectivity_table(analyses),
         "fronts": fronts_table(analyses),
         "carried": carried_table(analyses),
+        "timing": pd.DataFrame(columns=TIMING_COLUMNS) if timing is None else timing,
     }
     for name, table in tables.items():
         table.to_csv(out / f"{name}.csv", index=False, float_format="%.6g")
@@ -216,7 +229,11 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
     (out / "README.txt").write_text(
         f"headline.csv: per case and solver, CPU time (s) of the cheapest run within {targets} total error\n"
         "  against the case's truth, its settings, and SMFEM's speed-up (calculix: the cheapest of its\n"
-        "  procedures at each target, named in the cell; fronts.csv has each procedure's runs)\n"
+        "  procedures at each target, named in the cell; fronts.csv has each procedure's runs); each CPU time\n"
+        "  of a run within the target is the minimum over the timing pass's repeats (timing.csv), each speed-up a\n"
+        "  ratio of minima, and smfem_speedup_*_range its range over the repeats (the other's fastest over\n"
+        "  SMFEM's slowest to the other's slowest over SMFEM's fastest); a bound (> x) keeps the study's single\n"
+        "  shot of the dearest run\n"
         f"  error measure: {HEADLINE_MEASURE}\n"
         "stresses.csv: the same for the stress and plastic-strain probes (family), each family with its own\n"
         f"  targets ({'; '.join(f'{f}: ' + ' and '.join(f'{100 * t:g} %' for t in ts) for f, (_, ts) in FAMILIES.items())})\n"
@@ -243,5 +260,11 @@ def write_tables(analyses: list[CaseAnalysis], out: Path) -> dict[str, pd.DataFr
         "  error (headline measure), on_front and the key of the truth it was measured against; smfem report\n"
         "  --store-fronts keeps it with the stored truths (smfem/truths/CASE/front.csv), where smfem run --tol starts\n"
         "carried.csv: per series carried along its ladder to a target or a CPU budget (the full report's):\n"
-        "  the runs it made of its levels and where it stopped, and why\n")
+        "  the runs it made of its levels and where it stopped, and why\n"
+        "timing.csv: the timing pass: per case, solver and target, the run behind its headline CPU time (label),\n"
+        "  timed again one at a time with nothing else running, SMFEM's and the others' by turns, until it has\n"
+        f"  {RULE.repeats} repeats and {RULE.total_s:g} CPU s in all (a run over {RULE.long_s:g} s: once, twice "
+        "within the pass's budget): repeats,\n"
+        "  cpu_min_s (the headline's), cpu_median_s, cpu_max_s and study_cpu_s (the study's single shot, as\n"
+        "  runs.csv and fronts.csv keep it); smfem report --retime makes it again\n")
     return tables

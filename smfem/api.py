@@ -37,6 +37,7 @@ from smfem.runs.progress import Progress
 from smfem.runs.registry import SMFEM, family, lookup
 from smfem.runs.registry import solve as solve_with
 from smfem.runs.registry import solvers as registered
+from smfem.studies.timing import BUDGET_S as TIMING_BUDGET_S
 
 __all__ = ["Result", "compare", "error", "load", "read", "report", "run", "scenes", "solvers", "study", "truth"]
 
@@ -289,31 +290,43 @@ def error(result: Result, against=None) -> float:
 
 
 def study(scenes: list[str] | tuple[str, ...], out: str | Path = "out/study", *, full: bool = False,
-          workers: int = 2, progress: bool = True, cache: str | Path | None = None, scheduler: str | None = None):
+          workers: int = 2, progress: bool = True, cache: str | Path | None = None, scheduler: str | None = None,
+          timing_budget_s: float | None = TIMING_BUDGET_S):
     """Series of runs of ``scenes`` (built-in names, or scene files ``*.toml``: a study made for
     each, :mod:`smfem.studies.own_scene`) with every solver, their errors against the truth and
     the work-precision diagrams, as ``smfem study`` makes them (``out/tables/*.csv``,
     ``out/figures/``). Returns the :class:`reports.build.Report`: ``tables`` (name -> DataFrame),
     ``analyses`` (per scene), ``study`` (executed and cached runs). ``cache``: the run cache
     (default ``out/runs``; a run found there is read, not run); ``scheduler``: a dask
-    scheduler's address (``tcp://host:8786``) to run on instead of ``workers`` local processes."""
-    return _build(tuple(scenes), out, full, workers, progress, False, cache, scheduler)
+    scheduler's address (``tcp://host:8786``) to run on instead of ``workers`` local processes.
+    After the runs, the timing pass times the runs behind the headline again (:mod:`reports.timing`;
+    ``tables/timing.csv``); ``timing_budget_s``: the CPU s it may spend on a second timing of runs
+    over a minute; None: no pass, the study's single-shot CPU times."""
+    return _build(tuple(scenes), out, full, workers, progress, False, cache, scheduler, timing_budget_s)
 
 
 def report(out: str | Path = "out/report", *, full: bool = False, scenes: tuple[str, ...] = (), workers: int = 2,
-           progress: bool = True, cache: str | Path | None = None, scheduler: str | None = None):
+           progress: bool = True, cache: str | Path | None = None, scheduler: str | None = None,
+           timing_budget_s: float | None = TIMING_BUDGET_S, retime: bool = False):
     """The verification report (``index.html``, ``report.pdf``, ``tables/``, ``figures/``) as
     ``smfem report`` makes it; ``scenes``: a part of the plan (default: all); the rest as
-    :func:`study`. Returns the :class:`reports.build.Report`."""
-    return _build(tuple(scenes), out, full, workers, progress, True, cache, scheduler)
+    :func:`study`. ``retime``: redo only the timing pass on an earlier report of the same scenes
+    and settings in ``out`` (its run cache: a missing run raises
+    :class:`smfem.studies.study.NotInCache`) and write its tables and document again. Returns the
+    :class:`reports.build.Report`."""
+    return _build(tuple(scenes), out, full, workers, progress, True, cache, scheduler, timing_budget_s, retime)
 
 
-def _build(names: tuple[str, ...], out, full: bool, workers: int, progress: bool, document: bool, cache, scheduler):
+def _build(names: tuple[str, ...], out, full: bool, workers: int, progress: bool, document: bool, cache, scheduler,
+           timing_budget_s: float | None, retime: bool = False):
     from reports.build import build
     from smfem.studies.own_scene import select
     from smfem.studies.plan import full as full_plan, quick
+    from smfem.studies.timing import TimingRule
 
     threads.pin()
     plan = select(full_plan() if full else quick(), names, full)
+    timing = None if timing_budget_s is None else TimingRule(budget_s=timing_budget_s)
     return build(plan, Path(out), cache=cache and Path(cache), scheduler=scheduler, workers=workers,
-                 progress=progress, settings="full" if full else "quick", document=document)
+                 progress=progress, settings="full" if full else "quick", document=document, timing=timing,
+                 retime=retime)

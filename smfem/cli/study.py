@@ -15,16 +15,35 @@ def add(sub) -> None:
                                                                 "study made for the scene, docs/usage.md)")
     add_study_options(study, "out/study")
     _store_fronts(study)
+    _timing(study)
     study.set_defaults(handler=command)
     report = sub.add_parser("report", help="the verification report: index.html, report.pdf, tables/*.csv")
     report.add_argument("cases", nargs="*", metavar="CASE", help="only these scenes, built-in or from files "
                                                                  "(NAME.toml); default: every scene of the plan")
     add_study_options(report, "out/report")
     _store_fronts(report)
+    _timing(report)
+    report.add_argument("--retime", action="store_true",
+                        help="redo only the timing pass on the report in --out (its run cache, the same scenes and "
+                             "--quick/--full): runs no solver but the re-timed runs, and writes the tables and "
+                             "index.html, report.pdf again")
     report.add_argument("--publish", default=None, metavar="DIR",
-                        help="also keep tables/headline.csv, fronts.csv, carried.csv and run.json (wall time, machine, "
+                        help="also keep tables/headline.csv, fronts.csv, carried.csv, timing.csv and run.json (wall time, machine, "
                              "peak memory) in DIR: the findings README quotes (docs/full-report for --full)")
     report.set_defaults(handler=command)
+
+
+def _timing(parser) -> None:
+    from smfem.studies.timing import BUDGET_S, TimingRule
+
+    rule = TimingRule()
+    parser.add_argument("--timing-budget", type=float, default=BUDGET_S, metavar="SECONDS",
+                        help=f"the timing pass after the runs times each run behind the headline again, alone and "
+                             f"by turns with its competitor, to {rule.repeats} repeats and {rule.total_s:g} CPU s "
+                             f"(tables/timing.csv); a run over {rule.long_s:g} s is timed once, and once more while "
+                             f"the pass stays within this many CPU s (default {BUDGET_S:g}); 0: never twice")
+    parser.add_argument("--no-timing", action="store_true",
+                        help="no timing pass: the headline keeps the study's single-shot CPU times")
 
 
 def _store_fronts(parser) -> None:
@@ -35,9 +54,11 @@ def _store_fronts(parser) -> None:
 
 def command(args) -> int:
     """1 if a run failed with an error (the outputs are written all the same), else 0."""
+    from reports.timing import timed_runs
     from smfem import api  # the reports load matplotlib, jinja2, dask: only when asked
     from smfem.studies.executors import SchedulerUnreachable
     from smfem.studies.jobs import FAILED
+    from smfem.studies.study import NotInCache
 
     check_workers(args)
     out = Path(args.out)
@@ -45,16 +66,29 @@ def command(args) -> int:
     publish_to = getattr(args, "publish", None) and Path(args.publish)
     if publish_to:
         check_writable(publish_to, "--publish")
+    retime = getattr(args, "retime", False)
+    if retime and args.no_timing:
+        raise UsageError("--retime redoes the timing pass: it cannot go with --no-timing")
+    if args.timing_budget < 0:
+        raise UsageError(f"--timing-budget={args.timing_budget:g}: a budget is at least 0 CPU s")
+    budget = None if args.no_timing else args.timing_budget
     try:
-        make = api.report if args.command == "report" else api.study
-        report = make(out=out, full=args.full, scenes=tuple(getattr(args, "cases", ())), cache=args.cache,
-                      scheduler=args.scheduler, workers=args.workers, progress=not args.quiet)
-    except SchedulerUnreachable as exc:
+        if args.command == "report":
+            report = api.report(out=out, full=args.full, scenes=tuple(args.cases), cache=args.cache,
+                                scheduler=args.scheduler, workers=args.workers, progress=not args.quiet,
+                                timing_budget_s=budget, retime=retime)
+        else:
+            report = api.study(out=out, full=args.full, scenes=tuple(args.cases), cache=args.cache,
+                               scheduler=args.scheduler, workers=args.workers, progress=not args.quiet,
+                               timing_budget_s=budget)
+    except (SchedulerUnreachable, NotInCache) as exc:
         raise UsageError(str(exc)) from None
     for line in headline_lines(report.tables["headline"]):
         print(line)
     made = "index.html, report.pdf, " if args.command == "report" else ""
+    timed = timed_runs(report.tables["timing"])
     print(f"{args.command}: {len(report.study.executed)} runs executed, {report.study.cached} cached, "
+          f"{len(timed)} runs timed again ({int(timed.repeats.sum())} repeats), "
           f"{report.wall_time_s:.1f} s -> {out}/ ({made}tables/, figures/)")
     if publish_to:
         from reports.publish import publish

@@ -144,7 +144,7 @@ class RunCache:
         self.root = Path(root)
         self.warn = warn or (lambda line: print(line, file=sys.stderr))
         self._paths: dict[Job, Path] = {}  # a job's key is made once (a study asks several times)
-        self._walls: dict[str, float] | None = None  # earlier runs' wall times by key without version
+        self._earlier: dict[str, dict] | None = None  # earlier runs' records by key without version
 
     def path(self, job: Job) -> Path:
         if job not in self._paths:
@@ -169,16 +169,29 @@ class RunCache:
         """The wall time (s) of the last run of ``job`` made by any code version (the cache keeps
         the runs of earlier versions beside the current ones), or None: what a study expects
         the run to take (:func:`smfem.studies.study.run_cached`'s estimate of the time left)."""
-        if self._walls is None:
-            self._walls = {}
+        return (self.previous(job) or {}).get("wall_time_s")
+
+    def previous(self, job: Job) -> dict | None:
+        """The record of the last run of ``job`` made by any code version (:meth:`earlier`), or None."""
+        return self.earlier().get(_without_version(key_of(job)))
+
+    def earlier(self) -> dict[str, dict]:
+        """Every finished run on disk, of any code version, by its key without the version: its
+        ``case``, ``solver``, ``params``, and from its summary.json ``wall_time_s``, ``n_dof`` and
+        ``peak_memory_mb`` (None where the run did not record it); read once."""
+        if self._earlier is None:
+            self._earlier = {}
             for path in self.root.glob("*/*/*/job.json"):
                 try:
                     key = json.loads(path.read_text())["key"]
-                    wall = float(json.loads((path.parent / "summary.json").read_text())["wall_time_s"])
+                    summary = json.loads((path.parent / "summary.json").read_text())
+                    record = {"case": key["case"], "solver": key["solver"], "params": key["params"],
+                              "wall_time_s": float(summary["wall_time_s"]), "n_dof": summary.get("n_dof"),
+                              "peak_memory_mb": summary.get("peak_memory_mb")}
                 except (OSError, ValueError, KeyError, TypeError):
-                    continue  # no summary (a refused or failed run) or a damaged entry: no estimate
-                self._walls[_without_version(key)] = wall
-        return self._walls.get(_without_version(key_of(job)))
+                    continue  # no summary (a refused or failed run) or a damaged entry: no record
+                self._earlier[_without_version(key)] = record
+        return self._earlier
 
     def store(self, job: Job, outcome: Outcome) -> Run:
         """Write ``outcome`` atomically (a crash leaves no half run); a failure or a missing

@@ -16,6 +16,7 @@ from concurrent.futures.process import BrokenProcessPool
 from smfem.runs.registry import lookup
 
 from .jobs import Job, execute
+from .peak_memory import MemoryLimit
 
 
 class _Feed:
@@ -69,18 +70,28 @@ def in_worker(fn, *args, workers: int = 2):
     return _submit(workers, fn, *args)
 
 
-def local(queue: list[Job], workers: int):
+def local(queue: list[Job], workers: int, limit: MemoryLimit | None = None, start=None):
     """Run the jobs of ``queue`` on ``workers`` processes, spawned (a forked child would
     inherit the parent's thread pools) once in a session and kept for the next study; each
     pins its BLAS threads in :func:`~smfem.studies.jobs.execute`. Each job goes with its
-    solver's entry: a solver registered here is not in a spawned process's table. Left early
-    (the caller stops iterating, or an error), the jobs not started are cancelled and the
+    solver's entry: a solver registered here is not in a spawned process's table. At most
+    ``workers`` jobs are started at once, in queue order; with a ``limit``
+    (:class:`~smfem.studies.peak_memory.MemoryLimit`) a job starts only while its predicted peak
+    and the running jobs' stay within it, a later one that fits taking its turn meanwhile.
+    ``start(job) -> Future``: how a job starts (default: on the session's pool). Left early
+    (the caller stops iterating, or an error), the jobs not started are dropped and the
     running ones finish before it returns, as they did when each study had its own pool."""
-    feed = _Feed(queue)
-    pending = {}
+    start = start or (lambda job: _submit(workers, execute, job, lookup(job.solver)))
+    feed, waiting, pending = _Feed(queue), [], {}
 
     def submit():
-        pending.update({_submit(workers, execute, job, lookup(job.solver)): job for job in feed.new()})
+        waiting.extend(feed.new())
+        while len(pending) < workers and waiting:
+            job = limit.pick(waiting, list(pending.values())) if limit else waiting[0]
+            if job is None:
+                return
+            waiting.remove(job)
+            pending[start(job)] = job
 
     try:
         submit()
@@ -124,8 +135,9 @@ def dask(queue: list[Job], address: str, timeout: str = "20s"):
                 running.add(more)
 
 
-def run_jobs(queue: list[Job], scheduler: str | None = None, workers: int = 2):
-    """Dispatch to :func:`dask` when a scheduler address is given, else :func:`local`."""
+def run_jobs(queue: list[Job], scheduler: str | None = None, workers: int = 2, limit: MemoryLimit | None = None):
+    """Dispatch to :func:`dask` when a scheduler address is given (its own scheduler places the
+    runs: ``limit`` does not apply), else :func:`local`."""
     if not queue:
         return iter(())
-    return dask(queue, scheduler) if scheduler else local(queue, workers)
+    return dask(queue, scheduler) if scheduler else local(queue, workers, limit)

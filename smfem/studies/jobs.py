@@ -94,6 +94,14 @@ def series_every(case) -> int:
     return max(1, case.n_steps // SERIES_FRAMES)
 
 
+def solve_job(job: Job, solver: Solver):
+    """The solve of ``job`` as a study runs it (its fields, frames and options): the run a timing
+    pass repeats (:mod:`smfem.studies.timing`) measures what the study's run measured."""
+    case = job.build()
+    return solve(solver, case, fields=job.fields, every=series_every(case) if job.fields else 0,
+                 options=dict(job.options) or None)
+
+
 def execute(job: Job, solver: Solver | None = None) -> Outcome:
     """Run ``job`` as ``smfem run`` would and return its files; ``solver``: the entry of
     ``job.solver``, sent along to a worker process, whose table has only the built-in ones.
@@ -108,8 +116,7 @@ def execute(job: Job, solver: Solver | None = None) -> Outcome:
     memory.reset_peak()
     wall0 = time.perf_counter()
     try:
-        result = solve(solver, case, fields=job.fields, every=series_every(case) if job.fields else 0,
-                       options=dict(job.options) or None)
+        result = solve_job(job, solver)
     except ToolMissing as exc:
         return Outcome(NOT_INSTALLED, str(exc))
     except UnsupportedCase as exc:

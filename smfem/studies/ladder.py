@@ -21,18 +21,22 @@ from .jobs import Job
 from .plan import Series
 
 
-def work(params: dict, per_harmonic: bool) -> float:
-    """What a run's CPU time grows with, in the case's parameters: the section's (or body's)
-    elements, ``refine ** dim`` over ``coarsen ** dim``, the steps, ``t_end / dt``, for a
-    harmonic solver the harmonics, and the square of a modal run's ``modes`` (ccx's eigen-solve
-    grows about so: benchmarks/README.md; a solver option, passed in ``params`` beside the
-    case's). An estimate for
-    predicting a ladder's next run from its last (direct solvers grow faster than this with a
-    3-D mesh, a plastic run with its iterations, an explicit one with its Courant increment)."""
+def size(params: dict, per_harmonic: bool) -> float:
+    """What a run's unknowns grow with, in the case's parameters: the section's (or body's)
+    elements, ``refine ** dim`` over ``coarsen ** dim``, and for a harmonic solver the harmonics."""
     dim = params.get("dim", 2)
     cells = (params.get("refine", 1) / params.get("coarsen", 1)) ** dim
-    harmonics = max(params.get("harmonics", 1), 1) if per_harmonic else 1
-    return cells * harmonics * params.get("modes", 1) ** 2 * params["t_end"] / params["dt"]
+    return cells * (max(params.get("harmonics", 1), 1) if per_harmonic else 1)
+
+
+def work(params: dict, per_harmonic: bool) -> float:
+    """What a run's CPU time grows with, in the case's parameters: its :func:`size` times the
+    steps, ``t_end / dt``, and the square of a modal run's ``modes`` (ccx's eigen-solve grows
+    about so: benchmarks/README.md; a solver option, passed in ``params`` beside the case's).
+    An estimate for predicting a ladder's next run from its last (direct solvers grow faster
+    than this with a 3-D mesh, a plastic run with its iterations, an explicit one with its
+    Courant increment)."""
+    return size(params, per_harmonic) * params.get("modes", 1) ** 2 * params["t_end"] / params["dt"]
 
 
 @dataclass

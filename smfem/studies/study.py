@@ -15,6 +15,7 @@ from .eta import TimeLeft
 from .executors import run_jobs
 from .jobs import Job
 from .ladder import Ladder
+from .peak_memory import MemoryLimit, PeakMemory
 from .plan import SMFEM, CaseStudy
 from .stored import find as find_stored
 from .truth import Truth, assemble, plan_for
@@ -109,15 +110,21 @@ def _cost_order(job: Job) -> tuple:
     return (not lookup(job.solver).dear, -o.get("refine", 1), -o.get("harmonics", 0))
 
 
+class NotInCache(LookupError):
+    """A study asked to run nothing (``smfem report --retime``) lacks runs in its cache."""
+
+
 def run_cached(jobs: list[Job], cache: RunCache, scheduler: str | None = None, workers: int = 2,
-               progress: bool = True, follow=None) -> tuple[dict, list[Job], int]:
+               progress: bool = True, follow=None, cached_only: bool = False) -> tuple[dict, list[Job], int]:
     """Every run of ``jobs``, from ``cache`` or executed (longest first) and stored there, and
     of the jobs that ``follow(job, run) -> [Job]`` asks for once a run is there (the next
     level of a carried series, :mod:`smfem.studies.ladder`: cached, it is read at once; else it runs
     as soon as a worker is free).
 
     Returns the runs by job (followed ones too), the jobs executed and how many runs came from
-    the cache.
+    the cache. ``cached_only``: execute nothing; a run missing from the cache raises
+    :class:`NotInCache`. Local workers never start runs together whose predicted peak memory
+    (:mod:`smfem.studies.peak_memory`) passes the machine's available memory.
     """
     follow = follow or (lambda job, run: [])
     found: dict = {}  # cache path -> run
@@ -146,13 +153,19 @@ def run_cached(jobs: list[Job], cache: RunCache, scheduler: str | None = None, w
         return todo
 
     queue = sorted(ask(jobs), key=_cost_order)
+    if cached_only and queue:
+        raise NotInCache(f"{len(queue)} runs of this plan are not in the run cache {cache.root} (the first: "
+                         f"{queue[0].describe()}): make the report first, with the same scenes and settings")
     left = TimeLeft(cache, workers)
     if progress:
         left.expect(queue)
+    peaks = PeakMemory(cache)
     with Progress(len(queue), "study", "run", enabled=progress) as bar:
-        for done, (job, outcome) in enumerate(run_jobs(queue, scheduler, workers), start=1):
+        for done, (job, outcome) in enumerate(run_jobs(queue, scheduler, workers, MemoryLimit.of_machine(peaks)),
+                                              start=1):
             path = cache.path(job)
             found[path] = cache.store(job, outcome)
+            peaks.learn(job, found[path])
             more = ask([j for waiter in waiting.pop(path) for j in follow(waiter, found[path])])
             queue += more
             if progress:
@@ -164,7 +177,7 @@ def run_cached(jobs: list[Job], cache: RunCache, scheduler: str | None = None, w
 
 
 def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | None = None, workers: int = 2,
-              progress: bool = True) -> StudyResult:
+              progress: bool = True, cached_only: bool = False) -> StudyResult:
     """Run (or take from ``cache``) every run of ``plan``, and assemble each case's truth.
 
     Parameters
@@ -174,6 +187,7 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
     scheduler : address of a dask.distributed scheduler; None runs on local processes
     workers : local worker processes
     progress : show a progress bar over the runs (on stderr)
+    cached_only : run nothing: every run from the cache, else :class:`NotInCache`
     """
     wall0 = time.perf_counter()
     stored = {study.case: stored_truth(study) for study in plan}
@@ -188,7 +202,8 @@ def run_study(plan: tuple[CaseStudy, ...], cache: RunCache, scheduler: str | Non
 
     def follow(job, run):  # a carried series' next level; the companions an estimate asks for
         return (by_job[job].after(job, run) if job in by_job else []) + estimates(job, run)
-    runs, executed, cached = run_cached(every, cache, scheduler, workers, progress, follow=follow)
+    runs, executed, cached = run_cached(every, cache, scheduler, workers, progress, follow=follow,
+                                        cached_only=cached_only)
     cases = []
     for study, series, ref, fields, truth in layout:
         series |= {solver: ladder.running for solver, ladder in ladders[study.case].items()}

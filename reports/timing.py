@@ -1,0 +1,87 @@
+"""The report's timing pass: which runs decide its speed-ups, their CPU time as a minimum over
+repeats (:mod:`smfem.studies.timing`) in the headline, and ``tables/timing.csv``.
+
+The decisive runs are each solver's cheapest run within each headline target on each scene: the
+runs behind the headline's ``cpu_s_to_*`` cells (:func:`smfem.studies.metrics.cost_to`). Their
+costs take the minimum of the repeats, so SMFEM's speed-ups, its cheaper element and the
+verdict are ratios and choices of minima. The study's own single-shot CPU times stay in
+``runs.csv``, ``fronts.csv`` and the work-precision figures; a bound (``> x``: a solver that
+does not reach the target) keeps the single shot of that solver's dearest run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from itertools import zip_longest
+
+import pandas as pd
+
+from smfem.runs.registry import headline_name, lookup
+from smfem.studies.cache import Run
+from smfem.studies.jobs import OK
+from smfem.studies.metrics import REACHED
+from smfem.studies.plan import SMFEM
+from smfem.studies.timing import TimingRule, retime
+
+from .analysis import CaseAnalysis
+
+COLUMNS = ["case", "solver", "target", "label", "repeats", "cpu_min_s", "cpu_median_s", "cpu_max_s", "study_cpu_s"]
+
+
+def decisive(an: CaseAnalysis) -> dict[tuple[str, float], Run]:
+    """``(solver, target) -> run``: the run behind each headline cost that reaches its target."""
+    found = {}
+    for solver, s in an.solvers.items():
+        if s.status != OK:
+            continue
+        by_label = {run.label: run for run in an.runs.series[solver]}
+        found |= {(solver, target): by_label[cost.label] for target, cost in s.costs.items() if cost.how == REACHED}
+    return found
+
+
+def interleaved(runs) -> list:
+    """The distinct jobs of ``runs`` in the order to time them: SMFEM's and the others' by turns."""
+    jobs = list(dict.fromkeys(run.job for run in runs))
+    mine = [j for j in jobs if lookup(j.solver).family == SMFEM]
+    others = [j for j in jobs if lookup(j.solver).family != SMFEM]
+    return [j for pair in zip_longest(mine, others) for j in pair if j is not None]
+
+
+def time_headline(analyses: list[CaseAnalysis], rule: TimingRule = TimingRule(), progress: bool = True,
+                  **retime_options) -> pd.DataFrame:
+    """Time every scene's decisive runs again and put each minimum in its cost (and the timing in
+    ``an.timings``): the headline made after this holds ratios of minima. Returns the rows of
+    ``tables/timing.csv``; ``retime_options``: :func:`smfem.studies.timing.retime`'s ``run``."""
+    chosen = {an.case.name: decisive(an) for an in analyses}
+    timings = retime([interleaved(runs.values()) for runs in chosen.values() if runs], rule, progress=progress,
+                     **retime_options)
+    rows = []
+    for an in analyses:
+        for (solver, target), run in chosen[an.case.name].items():
+            timing, costs = timings[run.job], an.solvers[solver].costs
+            costs[target] = replace(costs[target], cpu=timing.cpu_min)
+            an.timings[solver, target] = timing
+            rows.append({"case": an.case.name, "solver": solver, "target": target, "label": run.label,
+                         "repeats": timing.repeats, "cpu_min_s": timing.cpu_min, "cpu_median_s": timing.cpu_median,
+                         "cpu_max_s": timing.cpu_max, "study_cpu_s": run.summary["cpu_time_s"]})
+    return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def speedup_range(an: CaseAnalysis, solver: str, target: float, cost, smfem_cost) -> str:
+    """``'262-301'``: the speed-up over ``solver``'s headline row at ``target`` (``cost``: its
+    cost there; a row of one solver's procedures takes the procedure whose cost it is) from the
+    repeats' extremes (its slowest SMFEM repeat against the other's fastest, and the other way
+    round); '' where either side was not timed (``smfem_cost``: SMFEM's cost there, with its
+    cheaper element)."""
+    other = next((t for (s, at), t in an.timings.items() if at == target and headline_name(s) == solver
+                  and an.solvers[s].costs[at].cpu == cost.cpu), None)
+    mine = next((t for (s, at), t in an.timings.items()
+                 if at == target and lookup(s).family == SMFEM and an.solvers[s].costs[at] is smfem_cost), None)
+    if other is None or mine is None:
+        return ""
+    return f"{other.cpu_min / mine.cpu_max:.3g}-{other.cpu_max / mine.cpu_min:.3g}"
+
+
+def timed_runs(timing: pd.DataFrame) -> pd.DataFrame:
+    """The rows of ``tables/timing.csv`` one per run timed (a run can decide both targets)."""
+    return timing.drop_duplicates(["case", "solver", "label"])

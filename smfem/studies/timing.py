@@ -1,0 +1,123 @@
+"""The timing pass: the runs that decide a report's speed-ups, timed again one at a time.
+
+A study runs two workers side by side on a shared host and times each run once: a speed-up
+whose cheap side takes 0.1-1 s then moves by a factor of two from one report to the next. The
+pass repeats each decisive run, in the manner of timeit's autorange and pyperf, with no other
+run on the machine: one worker process, one run at a time. A scene's runs are interleaved
+(SMFEM, competitor, SMFEM, competitor, ...) so that a drift of the host hits both sides of a
+ratio. Each run is repeated until it has :attr:`TimingRule.repeats` repeats and
+:attr:`TimingRule.total_s` CPU s in all; a run over :attr:`TimingRule.long_s` is timed once,
+and once more while the pass stays within :attr:`TimingRule.budget_s`. The CPU time is the
+solve's process time as the run measured it in the study (``RunResult.cpu_time_s``, one BLAS
+thread); which runs decide the headline is the report's to say (:mod:`reports.timing`).
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+from dataclasses import dataclass
+
+from smfem.runs import threads
+from smfem.runs.progress import Progress
+from smfem.runs.registry import Solver, lookup
+
+from .executors import in_worker
+from .jobs import Job, solve_job
+
+
+#: the CPU s a timing pass may spend before it stops timing a long run a second time (the
+#: command line's --timing-budget)
+BUDGET_S = 600.0
+
+
+@dataclass(frozen=True)
+class TimingRule:
+    """When a run has been timed often enough (the defaults are issue 59's)."""
+
+    #: at least this many repeats ...
+    repeats: int = 3
+    #: ... and at least this much CPU in all, s
+    total_s: float = 2.0
+    #: a run over this many CPU s is timed once ...
+    long_s: float = 60.0
+    #: ... and once more while the whole pass's CPU, with that repeat, stays within this, s
+    budget_s: float = BUDGET_S
+    #: repeats of a shorter run go to the worker together, as many as fill this many CPU s: a
+    #: round trip to the worker (about 0.2 s) would otherwise cost more than a 10 ms run
+    batch_s: float = 0.25
+
+    def done(self, times: list[float], spent: float) -> bool:
+        """Whether a run timed ``times`` (CPU s) needs no more repeats, ``spent`` CPU s into the pass."""
+        if not times:
+            return False
+        if times[0] > self.long_s:
+            return len(times) >= 2 or spent + times[0] > self.budget_s
+        return len(times) >= self.repeats and sum(times) >= self.total_s
+
+    def batch(self, times: list[float]) -> int:
+        """How many repeats to take in one go after ``times`` (one before the run's time is known)."""
+        if not times:
+            return 1
+        wanted = max(self.repeats - len(times), math.ceil((self.total_s - sum(times)) / min(times)), 1)
+        return max(1, min(wanted, int(self.batch_s / min(times))))
+
+
+@dataclass(frozen=True)
+class Timing:
+    """One run's repeats, CPU s in the order taken."""
+
+    job: Job
+    times: tuple[float, ...]
+
+    @property
+    def repeats(self) -> int:
+        return len(self.times)
+
+    @property
+    def cpu_min(self) -> float:
+        """The headline's CPU time: noise only ever adds to a run's time."""
+        return min(self.times)
+
+    @property
+    def cpu_median(self) -> float:
+        return statistics.median(self.times)
+
+    @property
+    def cpu_max(self) -> float:
+        return max(self.times)
+
+
+def cpu_of(job: Job, solver: Solver, repeats: int = 1) -> list[float]:
+    """The solve's CPU s of ``repeats`` more runs of ``job`` (in a worker process: pinned as a study's)."""
+    threads.pin()
+    return [float(solve_job(job, solver).cpu_time_s) for _ in range(repeats)]
+
+
+def in_one_worker(job: Job, repeats: int) -> list[float]:
+    """:func:`cpu_of` in one of the session's worker processes, waited for: nothing else runs
+    meanwhile (the caller starts the pass once the study's runs and side tables are done)."""
+    return in_worker(cpu_of, job, lookup(job.solver), repeats, workers=1).result()
+
+
+def retime(groups: list[list[Job]], rule: TimingRule = TimingRule(), run=in_one_worker,
+           progress: bool = True) -> dict[Job, Timing]:
+    """Each job of ``groups`` timed by ``run(job, repeats) -> [CPU s]`` until ``rule`` is met.
+
+    ``groups``: one list per scene, in the order to interleave (SMFEM, competitor, SMFEM, ...);
+    a scene's jobs are timed in rounds, each round running every job of the scene that still
+    needs a repeat once (a short one :meth:`TimingRule.batch` times), in that order, so that the
+    two sides of a ratio see the same host.
+    """
+    times: dict[Job, list[float]] = {job: [] for group in groups for job in group}
+    spent = 0.0
+    with Progress(len(times), "timing", "run", enabled=progress) as bar:
+        for group in groups:
+            while left := [job for job in group if not rule.done(times[job], spent)]:
+                for job in left:
+                    cpu = run(job, rule.batch(times[job]))
+                    times[job] += cpu
+                    spent += sum(cpu)
+                finished = sum(rule.done(t, spent) for t in times.values() if t)
+                bar.update(finished, f"{left[-1].scene}: {max(len(times[j]) for j in left)} repeats")
+    return {job: Timing(job, tuple(t)) for job, t in times.items()}
