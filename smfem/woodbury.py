@@ -2,8 +2,8 @@
 
 ``A = A_h + dA``: ``A_h`` is the body without cut-outs (f = 1), block-diagonal over the modes;
 ``dA`` carries ``f - 1``, nonzero only in the cut-out elements over the cut-outs' x3 intervals.
-At a Gauss-Legendre point ``q`` of those intervals the strains of every mode together are
-``Ba U(q) + Bb W(q)``, with ``U, W`` the two series along x3 of each cut-out dof
+At an x3 point ``q`` of those intervals (:func:`smfem.inhomogeneity.x3_rule`) the strains of
+every mode together are ``Ba U(q) + Bb W(q)``, with ``U, W`` the two series along x3 of each cut-out dof
 (:class:`smfem.sampling.DofSeries`: its displacement, and the wavenumber-weighted series in
 the other basis type), so ``dA = sum_q w_q Z_q' H_q Z_q`` with ``Z_q x = (U(q), W(q))`` and
 ``H_q`` the ``(f - 1)``-weighted energy of the cut-out elements in those values (moment-scheme

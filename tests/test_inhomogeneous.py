@@ -252,3 +252,38 @@ def test_the_field_marks_the_cut_out_cells(tmp_path):
     assert render_field(vtu, tmp_path / "field.png", "notched", "m").stat().st_size > 10_000
     whole = get_case("thick_cylinder", {"t_end": 4e-4})
     assert np.all(solve(whole).mesh.cell_data["solid"][0] == 1)
+
+
+def rule_error(x: np.ndarray, w: np.ndarray, omega: float) -> float:
+    """Largest error of ``x, w`` on ``cos(o x)`` and ``sin(o x)`` over [-1, 1], ``o <= omega``
+    (every 0.25 over the top 30 %), summed in long double so the sums' round-off does not count."""
+    o = np.concatenate([np.linspace(1e-3, 0.7 * omega, 40), np.arange(0.7 * omega, omega, 0.25),
+                        [omega]])
+    o, x, w = o.astype(np.longdouble), x.astype(np.longdouble), w.astype(np.longdouble)
+    phase = o[:, None] * x[None, :]
+    cos_error = np.abs(np.cos(phase) @ w - 2 * np.sin(o) / o).max()
+    return float(max(cos_error, np.abs(np.sin(phase) @ w).max()))
+
+
+def test_x3_rule_integrates_every_frequency_up_to_omega():
+    """The rule's count integrates to 1e-14 over omega 1-300, twice as many points too; two fewer
+    transplanted points (its margin and one) fail somewhere, so the check resolves the count."""
+    tight = []
+    for omega in np.geomspace(1.0, 300.0, 16):
+        x, w = inhomogeneity.x3_rule(omega)
+        assert rule_error(x, w, omega) < 1e-14, omega
+        assert rule_error(*inhomogeneity.x3_rule(omega, 2.0), omega) < 1e-14, omega
+        n = inhomogeneity.transplanted_points_needed(omega)
+        if n < inhomogeneity.gauss_points_needed(omega):
+            assert len(x) == n
+            tight.append(rule_error(*inhomogeneity.transplanted(n - 2), omega) > 1e-14)
+    assert any(tight) and len(tight) >= 8
+
+
+def test_x3_rule_takes_fewer_points_than_gauss_legendre_at_large_omega():
+    """The transplanted rule's count against Gauss-Legendre's: about 1.45 times fewer at
+    omega 1000 and more (pi/2, the band limit's, is the most a map can gain)."""
+    for omega in (1000.0, 2000.0):
+        plain = inhomogeneity.gauss_points_needed(omega)
+        ratio = plain / inhomogeneity.transplanted_points_needed(omega)
+        assert 1.4 < ratio < math.pi / 2
