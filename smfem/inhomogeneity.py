@@ -91,8 +91,9 @@ def transplanted_points_needed(omega: float) -> int:
     """Points of :func:`transplanted` that integrate ``cos(omega x)`` over [-1, 1] to 1e-14 for
     every frequency up to ``omega``: the least count measured (rule in long double, frequencies
     every 0.25 over the top 30 %) is 7, 12, 16, 23, 36, 55, 91, 163, 303, 443, 720 at omega = 1, 5,
-    10, 20, 50, 100, 200, 400, 800, 1200, 2000 (Gauss-Legendre: 8, 13, 18, 26, 47, 77, 134, 242,
-    453, 660, 1071; 1/pi of omega is the band limit's), this fit 1 to 6 above them. In double
+    10, 20, 50, 100, 200, 400, 800, 1200, 2000 (Gauss-Legendre, measured alike: 7, 13, 17, 25, 45,
+    74, 130, 238, 447, 654, 1063; omega / pi is the band limit's; ``benchmarks/x3_rule.py``), this
+    fit 1 to 6 above them. In double
     precision the nodes' rounding, which the map amplifies near the ends, leaves 1-3e-14 from
     omega 500 to 2000 (numpy's Gauss-Legendre weights left 2-6e-14 there)."""
     return int(math.ceil(0.338 * omega + 3.2 * omega ** (1 / 3) + 7)) + 1
