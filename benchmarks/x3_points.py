@@ -3,8 +3,8 @@
     python benchmarks/x3_points.py [--write] [--scenes NAME ...] [--tiny]
 
 For each plastic scene and each harmonic count its studies run: SMFEM from the fewest
-Gauss-Legendre points that integrate the kept modes exactly (``x3_oversampling = 1``), the
-count doubled until the plastic-zone area (peps >= 0.1 %, at each of the scene's zone times)
+points (:func:`smfem.inhomogeneity.x3_rule`) that integrate the kept modes exactly
+(``x3_oversampling = 1``), the count doubled until the plastic-zone area (peps >= 0.1 %, at each of the scene's zone times)
 moves by at most 1 % of the zone's largest area when it doubles once more
 (:data:`cases.x3_points.AREA_TOLERANCE`; at most 16 times the exact count). Prints every
 doubling (points, CPU, areas, change) and the chosen count; ``--write`` stores the choices in

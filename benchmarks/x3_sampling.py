@@ -61,7 +61,8 @@ class RowProducts:
         self.G = sp.block_diag([s.T.T @ scatter for s in model.systems], format="csr")
         self.Gt = self.G.T.tocsr()
         self.psi, self.psi_w, self.shape = points.series.psi, points.series.psi_w, (n_modes, ne, ng)
-        self.scale, self.rows = points.scale, (slice(0, 4), slice(4, 6))  # psi1 rows, psi3 rows
+        # every element's factor (the stress rows' path scales them all)
+        self.scale, self.rows = points.factor[None, :, None, :], (slice(0, 4), slice(4, 6))  # psi1, psi3 rows
 
     def stress(self, u):
         n_modes, ne, ng = self.shape
@@ -210,7 +211,8 @@ def measure(name: str, harmonics: int, repeat: int) -> dict:
     except ImportError:
         out["finufft"] = None
     else:
-        stress = lambda: (points.to_stress @ nonuniform.values(u)).reshape(points.point_shape) * points.scale
+        factor = points.factor[None, :, None, :]
+        stress = lambda: (points.to_stress @ nonuniform.values(u)).reshape(points.point_shape) * factor
         project = lambda: nonuniform.project(points.from_stress @ flat)
         assert off(stress(), sigma) < 1e-10 and off(project(), forces) < 1e-10
         out["finufft"] = per_call((stress, project), repeat)

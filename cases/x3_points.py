@@ -1,6 +1,7 @@
 """How many stress points along x3 SMFEM's plastic runs take, per scene and harmonic count.
 
-The plastic strains live at Gauss-Legendre points along x3 (:mod:`smfem.sampling`). The fewest
+The plastic strains live at points along x3 (:mod:`smfem.sampling`, the rule
+:func:`smfem.inhomogeneity.x3_rule`). The fewest
 that integrate the kept modes' products exactly leave plastic zones coarse along x3 where few
 harmonics are kept; more points cost CPU on every iteration. So the count is a multiple of that
 exact count (a power of 2), measured per scene and harmonic count by doubling it until the

@@ -3,8 +3,8 @@
 ``K x = K_h x + C_K x`` and ``M x = M_h x + C_M x``: ``K_h``, ``M_h`` are the block-diagonal
 operators of the body without cut-outs (f = 1: different harmonics are orthogonal along x3),
 and the corrections ``C`` carry ``f - 1``, which is nonzero only in the cut-out elements over
-the cut-outs' x3 intervals. There the corrections are integrated at the Gauss-Legendre points
-of those intervals (exact for the products of the kept modes, :mod:`smfem.inhomogeneity`):
+the cut-outs' x3 intervals. There the corrections are integrated at the x3 points of those
+intervals (exact for the products of the kept modes, :func:`smfem.inhomogeneity.x3_rule`):
 the amplitudes are synthesized at the points, weighted by ``f - 1`` and projected back. The
 cost grows with the cut-out's points times the modes, not with the square of the modes as
 the coupled matrix does: at 400 harmonics on the notched strip it is a few per cent of one
@@ -21,8 +21,8 @@ from .sampling import DofSeries, carried_dofs, section_maps
 
 
 def cutout_points(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The Gauss-Legendre points of the cut-outs' x3 intervals: ``x3``, weights and ``f - 1``
-    per cut-out element (ne, nq)."""
+    """The x3 points of the cut-outs' intervals: ``x3``, weights and ``f - 1`` per cut-out
+    element (ne, nq)."""
     live = model.cutout_elements
     inside = (model.factor[live] != 1.0).any(axis=0)
     return model.x3[inside], model.x3_weights[inside], model.factor[np.ix_(live, inside)] - 1.0

@@ -1,9 +1,10 @@
 """Stress sample points of the nonlinear solver: strain synthesis and internal forces.
 
 Stresses live at the element's sample points in the section (the moment scheme: its 2 x 2
-Gauss points, :mod:`smfem.element`) times Gauss-Legendre points along x3 on the pieces between
-cut-out edges. The section points integrate the element's stiffness exactly
-(:mod:`smfem.elements`) and the x3 rule the products of the kept modes, so the internal
+Gauss points, :mod:`smfem.element`) times the points of :func:`smfem.inhomogeneity.x3_rule`
+along x3 on the pieces between cut-out edges (transplanted Gauss-Legendre). The section
+points integrate the element's stiffness exactly (:mod:`smfem.elements`) and the x3 rule the
+products of the kept modes, so the internal
 forces of an elastic state are ``K u`` with the exact coupling: the plastic strains then can
 only soften what ``K`` holds, and the iterations converge.
 
@@ -61,7 +62,7 @@ class DofSeries:
     the products along x3 (modes times points) act on two rows per dof instead of six stress
     rows per section sample point (on a large mesh of 4-node elements a quarter). The rows are
     sorted by basis type, one matrix product per type; :attr:`row` says where each series is.
-    The products are dense on purpose: at today's Gauss-Legendre points nonuniform FFTs
+    The products are dense on purpose: at nonuniform points along x3 nonuniform FFTs
     (FINUFFT, O(H log H)) lose to them up to about 1400 harmonics on this project's scenes
     (measured, ``benchmarks/x3_sampling.py`` and its table in ``benchmarks/README.md``).
 
@@ -217,7 +218,8 @@ class Symmetry:
 
 def sample_points(model, oversampling: float, at_least: int = 0) -> tuple[np.ndarray, np.ndarray, Symmetry]:
     """Points and weights along x3 over the fundamental domain (each weighted for its images):
-    ``oversampling`` times the Gauss-Legendre points that integrate the modes' products exactly,
+    ``oversampling`` times the points (:func:`smfem.inhomogeneity.x3_rule`) that integrate the
+    modes' products exactly,
     and more where that makes fewer than ``at_least`` (few harmonics still have plastic zones to
     resolve along x3)."""
     sym = Symmetry(model)

@@ -2,8 +2,8 @@
 
 ``A = A_h + dA``: ``A_h`` is the body without cut-outs (f = 1), block-diagonal over the modes;
 ``dA`` carries ``f - 1``, nonzero only in the cut-out elements over the cut-outs' x3 intervals.
-At a Gauss-Legendre point ``q`` of those intervals the strains of every mode together are
-``Ba U(q) + Bb W(q)``, with ``U, W`` the two series along x3 of each cut-out dof
+At an x3 point ``q`` of those intervals (:func:`smfem.inhomogeneity.x3_rule`) the strains of
+every mode together are ``Ba U(q) + Bb W(q)``, with ``U, W`` the two series along x3 of each cut-out dof
 (:class:`smfem.sampling.DofSeries`: its displacement, and the wavenumber-weighted series in
 the other basis type), so ``dA = sum_q w_q Z_q' H_q Z_q`` with ``Z_q x = (U(q), W(q))`` and
 ``H_q`` the ``(f - 1)``-weighted energy of the cut-out elements in those values (moment-scheme
@@ -49,9 +49,10 @@ def point_combinations(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     weight, so there ``dA = sum_q w_q Z_q' H Z_q`` needs only the span of the modes' values
     ``sqrt(w_q) psi(q)``: with the columns of ``P`` an orthonormal basis of it (an SVD, to
     :data:`COMBINE_TOL`), the combinations ``sqrt(w_q) P[q, i]`` give the same sum. The
-    modes on a short interval have fewer independent values than the points that integrate
-    their products (moving_load_notched at 480 harmonics: 38 of 47; a ring whose modes share
-    a symmetry: notched_cylinder refine 8 at 160 harmonics 107 of 346)."""
+    modes have fewer independent values there than the points that integrate their products
+    where the modes share a symmetry (notched_cylinder refine 8 at 160 harmonics: 107 of 248);
+    on a short interval the transplanted rule's points already are about as many as those
+    (moving_load_notched quad9 at 480 harmonics: 37 of 37)."""
     x3, w, excess = cutout_points(model)
     psi = np.array([fourier.psi(s.mode, x3, model.body, model.length) for s in model.systems])  # (modes, 2, nq)
     values = np.sqrt(w)[:, None] * psi.transpose(2, 1, 0).reshape(len(x3), -1)  # (nq, 2 modes)

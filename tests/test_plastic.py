@@ -154,7 +154,7 @@ def test_anderson_acceleration_reaches_the_same_solution_in_fewer_iterations():
 def test_elastic_forces_at_the_sample_points_are_K_u_over_the_fundamental_domain(name, sets, width, copies):
     """The stress points cover only the modes' fundamental domain along x3 (half the strip's
     span, a quarter of the cylinders, one point of the axisymmetric dome), weighted for all
-    its images, and the Gauss-Legendre rule there is exact: the forces of the elastic stresses
+    its images, and the x3 rule there is exact: the forces of the elastic stresses
     of any amplitudes are K u with the exact coupling. The images tile the period."""
     from smfem.coupling import StackedOperator
     from smfem.sampling import SamplePoints
