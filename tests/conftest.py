@@ -1,6 +1,8 @@
 import sys
 from pathlib import Path
 
+import pytest
+
 # tests import their helpers as a plain module
 sys.path.insert(0, str(Path(__file__).parent))
 
@@ -69,3 +71,14 @@ def pytest_collection_modifyitems(config, items):
             seen.add(key)
     if len(items) > 1000 and seen != LONG_STUDIES:  # a whole run: every name must still be a test
         raise pytest.UsageError(f"tests/conftest.py LONG_STUDIES names no test: {sorted(LONG_STUDIES - seen)}")
+
+
+@pytest.fixture(scope="session")
+def tiny(tmp_path_factory):
+    """The tiny report (test_report.TINY: the dome and the thick cylinder, a few runs each),
+    timing pass and document included, built once per worker for the report's and the timing
+    pass's tests."""
+    from reports.build import build
+    from test_report import TINY
+
+    return build(TINY, tmp_path_factory.mktemp("report"), workers=2, progress=False, settings="tiny")

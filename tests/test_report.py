@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import shutil
 import subprocess
 
@@ -13,8 +14,10 @@ import pytest
 from browser import chromium, screenshot, verdict_on_first_screen
 from cases import UnsupportedCase, get_case
 from smfem.studies import metrics
+from smfem.studies.metrics import TARGETS
 from reports.analysis import analyse
 from reports.build import build
+from reports.timing import COLUMNS
 from smfem.studies.cache import Run, RunCache
 from smfem.runs.registry import CALCULIX_MODAL, headline_name, lookup
 from smfem.studies.jobs import NOT_AVAILABLE, NOT_INSTALLED, Job, execute
@@ -42,12 +45,6 @@ TINY = (
     ), reference=(REF2D, {"refine": 2}), truth=TruthPlan(MODAL_TRUTH, refine=(1, 2), harmonics=(10, 20)),
         base={"t_end": 4e-4}),
 )
-
-
-@pytest.fixture(scope="module")
-def tiny(tmp_path_factory):
-    out = tmp_path_factory.mktemp("report")
-    return build(TINY, out, workers=2, progress=False, settings="tiny")
 
 
 def test_tiny_report_has_a_figure_per_case_the_headline_and_the_tables(tiny):
@@ -338,7 +335,7 @@ def test_a_reason_in_a_cell_is_said_once_under_its_table(tiny):
 
 
 def test_a_rebuilt_report_runs_nothing_new(tiny, tmp_path):
-    again = build(TINY, tmp_path / "again", cache=tiny.out / "runs", progress=False, document=False)
+    again = build(TINY, tmp_path / "again", cache=tiny.out / "runs", progress=False, document=False, timing=None)
     assert again.study.executed == [] and again.study.cached == tiny.study.cached + len(tiny.study.executed)
     first = pd.read_csv(tiny.out / "tables" / "errors.csv")
     second = pd.read_csv(tmp_path / "again" / "tables" / "errors.csv")
@@ -360,7 +357,7 @@ def test_damaged_cache_entries_are_run_again_and_the_report_is_unchanged(tiny, t
     (entries[2] / "history.csv").unlink()
     capsys.readouterr()
     dome = TINY[:1]
-    again = build(dome, tmp_path / "again", cache=cache, progress=False, document=False)
+    again = build(dome, tmp_path / "again", cache=cache, progress=False, document=False, timing=None)
     err = capsys.readouterr().err
     assert len(again.study.executed) == 3, again.study.executed
     for damage in ("summary.json differs from its checksum", "history.csv differs from its checksum",
@@ -374,7 +371,7 @@ def test_damaged_cache_entries_are_run_again_and_the_report_is_unchanged(tiny, t
         pd.testing.assert_frame_equal(first.drop(columns=timed), second.drop(columns=timed))
     assert all((e / "history.csv").exists() and (e / "summary.json").exists() for e in entries)
     # and the entries stand repaired: a third build runs nothing
-    assert build(dome, tmp_path / "third", cache=cache, progress=False, document=False).study.executed == []
+    assert build(dome, tmp_path / "third", cache=cache, progress=False, document=False, timing=None).study.executed == []
 
 
 def test_study_on_a_dask_local_cluster_matches_the_local_processes_and_carries_a_ladder(tiny, tmp_path,
@@ -398,7 +395,7 @@ def test_study_on_a_dask_local_cluster_matches_the_local_processes_and_carries_a
     # two worker processes of one thread each, as `dask worker ADDRESS --nworkers 2 --nthreads 1`
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         assert len(cluster.workers) == 2
-        report = build(plan, tmp_path, scheduler=cluster.scheduler_address, progress=False, document=False)
+        report = build(plan, tmp_path, scheduler=cluster.scheduler_address, progress=False, document=False, timing=None)
     assert len(report.study.executed) == 3  # r1, then r2; the 2D reference beside them
     runs = report.analyses[0].runs
     assert [r.label for r in runs.series[SMFEM]] == ["r1 H1", "r2 H1"]
@@ -406,7 +403,7 @@ def test_study_on_a_dask_local_cluster_matches_the_local_processes_and_carries_a
     np.testing.assert_allclose(runs.series[SMFEM][1].history.to_numpy(), local["r2 H1"].history.to_numpy(),
                                rtol=1e-12, atol=1e-15)
     # resumed from its cache, the ladder climbs its cached runs at once and runs nothing
-    again = build(plan, tmp_path / "again", cache=tmp_path / "runs", progress=False, document=False)
+    again = build(plan, tmp_path / "again", cache=tmp_path / "runs", progress=False, document=False, timing=None)
     assert again.study.executed == [] and again.analyses[0].runs.carried == runs.carried
 
 
@@ -455,7 +452,7 @@ def test_study_command_writes_tables_and_figures_from_the_cache(tiny, tmp_path, 
 
     monkeypatch.setattr(smfem.studies.plan, "quick", lambda: TINY)  # the study command reads it when it runs
     out = tmp_path / "study"
-    assert main(["study", "dome", "--out", str(out), "--cache", str(tiny.out / "runs"), "--quiet"]) == 0
+    assert main(["study", "dome", "--out", str(out), "--cache", str(tiny.out / "runs"), "--quiet", "--no-timing"]) == 0
     printed = capsys.readouterr().out
     assert "0 runs executed" in printed and "reference-3d" in printed
     # the headline in short lines, one per target (the table is in tables/headline.csv)
@@ -794,3 +791,56 @@ def test_the_effectivity_figure_keeps_its_text_inside_for_one_scene_or_many(name
             for setting, e in zip(("defaults", "refine 2", "dt/2"), (0.7, 1.3, 2.9))]
     figures.effectivity(pd.DataFrame(rows), tmp_path / "effectivity.png")
     assert len(kept) == 1 and _texts_outside(kept[0]) == []
+
+
+# the timing pass on the tiny report (tests/test_timing.py: its rule and order): here, so that
+# the report is built once (one file, one xdist worker)
+MEASURED = re.compile(r"^[0-9.e+-]+x$")  # a speed-up both of whose sides reach the target
+
+
+def check_timing(tables: dict) -> None:
+    """timing.csv's columns; every run under 10 s with at least 3 repeats; every measured speed-up
+    of the headline the ratio of its two minima, each cost's CPU time its run's minimum."""
+    timing, head = tables["timing"], tables["headline"]
+    assert list(timing.columns) == COLUMNS and len(timing)
+    assert (timing[timing.cpu_min_s < 10].repeats >= 3).all()
+    assert ((timing.cpu_min_s <= timing.cpu_median_s) & (timing.cpu_median_s <= timing.cpu_max_s)).all()
+    minimum = {(r.case, r.solver, r.target): r.cpu_min_s for r in timing.itertuples()}
+    checked = 0
+    for row in head.itertuples():
+        for target in TARGETS:
+            pct = f"{100 * target:g}pct"
+            # a row of one solver's procedures (CalculiX's): the cheapest of their minima
+            timed = [cpu for (case, solver, at), cpu in minimum.items()
+                     if case == row.case and at == target and headline_name(solver) == row.solver]
+            if timed:
+                assert getattr(row, f"cpu_s_to_{pct}").startswith(f"{min(timed):.3g} (")
+            speedup = str(getattr(row, f"smfem_speedup_{pct}"))
+            if not MEASURED.match(speedup):
+                continue
+            mine = min(cpu for (case, solver, at), cpu in minimum.items()
+                       if case == row.case and at == target and lookup(solver).family == SMFEM)
+            assert float(speedup[:-1]) == pytest.approx(min(timed) / mine, rel=5e-3)
+            assert getattr(row, f"smfem_speedup_{pct}_range")
+            checked += 1
+    assert checked
+
+
+def test_the_report_times_its_decisive_runs_again_and_its_speedups_are_ratios_of_minima(tiny):
+    check_timing(tiny.tables)
+    written = pd.read_csv(tiny.out / "tables" / "timing.csv")
+    assert list(written.columns) == COLUMNS and len(written) == len(tiny.tables["timing"])
+    # the study's single shots stay where they were: runs.csv and fronts.csv
+    fronts = tiny.tables["fronts"]
+    shots = {(r.case, r.solver, r.level): r.cpu_s for r in fronts.itertuples()}
+    assert all(shots[r.case, r.solver, r.label] == pytest.approx(r.study_cpu_s)
+               for r in tiny.tables["timing"].itertuples())
+
+
+def test_retime_runs_nothing_but_the_timing_pass_and_writes_timing_again(tiny, tmp_path):
+    again = build(TINY, tmp_path / "again", cache=tiny.out / "runs", progress=False, settings="tiny",
+                  document=False, retime=True)
+    assert again.study.executed == []
+    check_timing(again.tables)
+    first, second = tiny.tables["timing"], again.tables["timing"]
+    assert first[["case", "solver", "target", "label"]].equals(second[["case", "solver", "target", "label"]])

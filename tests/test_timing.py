@@ -1,5 +1,6 @@
-"""The timing pass (smfem/studies/timing.py, reports/timing.py): its rule, the order it times
-runs in, and what a report's tables/timing.csv holds, after the build and after --retime.
+"""The timing pass (smfem/studies/timing.py, reports/timing.py): its rule and the order it times
+runs in (what a report's tables/timing.csv holds, after the build and after --retime: in
+tests/test_report.py, beside the tiny report they read).
 
 Whether two passes agree within 10 % depends on the machine's load; what holds on any machine
 is the structure: enough repeats, and each speed-up the ratio of its two minima.
@@ -7,22 +8,9 @@ is the structure: enough repeats, and each speed-up the ratio of its two minima.
 
 from __future__ import annotations
 
-import re
-
-import pandas as pd
-import pytest
-
-from reports.build import build
-from reports.timing import COLUMNS
 from smfem.cli import main
-from smfem.runs.registry import headline_name, lookup
 from smfem.studies.jobs import Job
-from smfem.studies.metrics import TARGETS
-from smfem.studies.plan import SMFEM
-from smfem.studies.timing import TimingRule, retime
-from test_report import TINY
-
-MEASURED = re.compile(r"^[0-9.e+-]+x$")  # a speed-up both of whose sides reach the target
+from smfem.studies.timing import Timing, TimingRule, retime
 
 
 def test_a_run_is_done_at_three_repeats_and_two_cpu_seconds_and_a_long_one_once_or_twice():
@@ -53,61 +41,18 @@ def test_a_scenes_runs_are_timed_by_turns_and_each_until_the_rule_holds():
     assert timings[third].repeats == 1  # over a minute, and a second timing would pass the budget
 
 
-def check_timing(tables: dict) -> None:
-    """timing.csv's columns; every run under 10 s with at least 3 repeats; every measured speed-up
-    of the headline the ratio of its two minima, each cost's CPU time its run's minimum."""
-    timing, head = tables["timing"], tables["headline"]
-    assert list(timing.columns) == COLUMNS and len(timing)
-    assert (timing[timing.cpu_min_s < 10].repeats >= 3).all()
-    assert ((timing.cpu_min_s <= timing.cpu_median_s) & (timing.cpu_median_s <= timing.cpu_max_s)).all()
-    minimum = {(r.case, r.solver, r.target): r.cpu_min_s for r in timing.itertuples()}
-    checked = 0
-    for row in head.itertuples():
-        for target in TARGETS:
-            pct = f"{100 * target:g}pct"
-            # a row of one solver's procedures (CalculiX's): the cheapest of their minima
-            timed = [cpu for (case, solver, at), cpu in minimum.items()
-                     if case == row.case and at == target and headline_name(solver) == row.solver]
-            if timed:
-                assert getattr(row, f"cpu_s_to_{pct}").startswith(f"{min(timed):.3g} (")
-            speedup = str(getattr(row, f"smfem_speedup_{pct}"))
-            if not MEASURED.match(speedup):
-                continue
-            mine = min(cpu for (case, solver, at), cpu in minimum.items()
-                       if case == row.case and at == target and lookup(solver).family == SMFEM)
-            assert float(speedup[:-1]) == pytest.approx(min(timed) / mine, rel=5e-3)
-            assert getattr(row, f"smfem_speedup_{pct}_range")
-            checked += 1
-    assert checked
-
-
-@pytest.fixture(scope="module")
-def tiny_timed(tmp_path_factory):
-    out = tmp_path_factory.mktemp("timed")
-    return build(TINY, out, workers=2, progress=False, settings="tiny", document=False)
-
-
-def test_the_report_times_its_decisive_runs_again_and_its_speedups_are_ratios_of_minima(tiny_timed):
-    check_timing(tiny_timed.tables)
-    written = pd.read_csv(tiny_timed.out / "tables" / "timing.csv")
-    assert list(written.columns) == COLUMNS and len(written) == len(tiny_timed.tables["timing"])
-    # the study's single shots stay where they were: runs.csv and fronts.csv
-    fronts = tiny_timed.tables["fronts"]
-    shots = {(r.case, r.solver, r.level): r.cpu_s for r in fronts.itertuples()}
-    assert all(shots[r.case, r.solver, r.label] == pytest.approx(r.study_cpu_s)
-               for r in tiny_timed.tables["timing"].itertuples())
-
-
-def test_retime_runs_nothing_but_the_timing_pass_and_writes_timing_again(tiny_timed, tmp_path):
-    again = build(TINY, tmp_path / "again", cache=tiny_timed.out / "runs", progress=False, settings="tiny",
-                  document=False, retime=True)
-    assert again.study.executed == []
-    check_timing(again.tables)
-    first, second = tiny_timed.tables["timing"], again.tables["timing"]
-    assert first[["case", "solver", "target", "label"]].equals(second[["case", "solver", "target", "label"]])
-
-
 def test_retime_without_the_reports_runs_is_a_usage_error(tmp_path, capsys):
     assert main(["report", "dome", "--retime", "--out", str(tmp_path / "none"), "--quiet"]) == 2
     assert "not in the run cache" in capsys.readouterr().err
     assert main(["report", "dome", "--retime", "--no-timing", "--out", str(tmp_path / "none")]) == 2
+
+
+def test_the_quick_settings_keep_the_study_shot_of_a_dear_run():
+    """A quick report times only the runs whose study shot took at most 10 s (the cheap side of
+    its ratios); a dearer run's shot stands as zero repeats. A full one times every run."""
+    quick, full = TimingRule.of(False), TimingRule.of(True)
+    assert quick.kept(10.5) and not quick.kept(9.5) and not full.kept(1e6)
+    job = Job("dome", "reference-3d", ())
+    kept = Timing(job, (30.9,), retimed=False)
+    assert kept.repeats == 0 and kept.cpu_min == kept.cpu_max == 30.9
+    assert Timing(job, (1.0, 0.9, 1.1)).repeats == 3

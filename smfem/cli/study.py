@@ -41,7 +41,9 @@ def _timing(parser) -> None:
                         help=f"the timing pass after the runs times each run behind the headline again, alone and "
                              f"by turns with its competitor, to {rule.repeats} repeats and {rule.total_s:g} CPU s "
                              f"(tables/timing.csv); a run over {rule.long_s:g} s is timed once, and once more while "
-                             f"the pass stays within this many CPU s (default {BUDGET_S:g}); 0: never twice")
+                             f"the pass stays within this many CPU s (default {BUDGET_S:g}); 0: never twice. The "
+                             f"quick settings time only runs whose study shot took at most "
+                             f"{TimingRule.of(False).kept_s:g} s: a dearer run's shot stands (0 repeats)")
     parser.add_argument("--no-timing", action="store_true",
                         help="no timing pass: the headline keeps the study's single-shot CPU times")
 

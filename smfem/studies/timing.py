@@ -46,6 +46,20 @@ class TimingRule:
     #: repeats of a shorter run go to the worker together, as many as fill this many CPU s: a
     #: round trip to the worker (about 0.2 s) would otherwise cost more than a 10 ms run
     batch_s: float = 0.25
+    #: a run whose study shot took over this many CPU s is not timed again: the shot stands, as
+    #: zero repeats (the quick report: its dearest competitor runs, 7 of 43, would take 137 of the
+    #: pass's 330 CPU s and bring the report past ten minutes); None: every run is timed
+    kept_s: float | None = None
+
+    def kept(self, study_cpu_s: float) -> bool:
+        """Whether a run whose study shot took ``study_cpu_s`` keeps it untimed."""
+        return self.kept_s is not None and study_cpu_s > self.kept_s
+
+    @classmethod
+    def of(cls, full: bool, budget_s: float = BUDGET_S) -> "TimingRule":
+        """The rule of a full report (every decisive run timed) or a quick one (runs over 10 s
+        keep their study shot: the cheap side of a ratio, which moved it by two, is timed)."""
+        return cls(budget_s=budget_s) if full else cls(budget_s=budget_s, kept_s=10.0)
 
     def done(self, times: list[float], spent: float) -> bool:
         """Whether a run timed ``times`` (CPU s) needs no more repeats, ``spent`` CPU s into the pass."""
@@ -69,10 +83,12 @@ class Timing:
 
     job: Job
     times: tuple[float, ...]
+    #: False: not timed again, ``times`` the study's single shot (:attr:`TimingRule.kept_s`)
+    retimed: bool = True
 
     @property
     def repeats(self) -> int:
-        return len(self.times)
+        return len(self.times) if self.retimed else 0
 
     @property
     def cpu_min(self) -> float:
