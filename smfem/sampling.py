@@ -294,9 +294,9 @@ class SamplePoints:
         points and the x3 points among them, and the series of their elements' dofs, take part
         (a step's plastic increments are at a few points: notched cylinder 1.5 %); where they
         are many (the notched strip's hinge: 20 %), the whole arrays' products are cheaper."""
-        nq = len(self.x3)
-        if len(points) > DENSE_SHARE * self.from_stress.shape[1] // 6 * nq:
-            full = np.zeros((6, self.from_stress.shape[1] // 6 * nq))
+        nq, n_section = len(self.x3), self.point_shape[1] * self.point_shape[2]
+        if len(points) > DENSE_SHARE * n_section * nq:
+            full = np.zeros((6, n_section * nq))
             full[:, points] = values
             return self.forces(full)
         section, x3 = np.divmod(points, nq)
@@ -304,7 +304,6 @@ class SamplePoints:
         live_x3, at_x3 = np.unique(x3, return_inverse=True)
         block = np.zeros((6, len(live_section), len(live_x3)))
         block[:, at_section, at_x3] = values
-        n_section = self.from_stress.shape[1] // 6
         columns = (np.arange(6)[:, None] * n_section + live_section[None, :]).ravel()
         sliced = self.from_stress_by_column[:, columns]
         touched = np.unique(sliced.indices)

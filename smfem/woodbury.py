@@ -42,8 +42,8 @@ COMBINE_TOL = 1e-13
 
 def point_combinations(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The cut-out points as fewer combinations with the same energies: ``(x3, combine,
-    representative)``, ``combine`` (nq, r) and for each combination a point whose cut-out
-    factors it shares.
+    excess)``, ``combine`` (nq, r) and ``excess`` (cut-out elements, r) the cut-out factors
+    each combination's points share.
 
     Points whose cut-out elements have the same factors (``excess``) share ``H_q`` up to their
     weight, so there ``dA = sum_q w_q Z_q' H Z_q`` needs only the span of the modes' values
@@ -57,7 +57,7 @@ def point_combinations(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     psi = np.array([fourier.psi(s.mode, x3, model.body, model.length) for s in model.systems])  # (modes, 2, nq)
     values = np.sqrt(w)[:, None] * psi.transpose(2, 1, 0).reshape(len(x3), -1)  # (nq, 2 modes)
     _, group = np.unique(excess.T, axis=0, return_inverse=True)
-    columns, representative = [], []
+    columns, representative = [], []  # a point of each combination
     for g in range(group.max() + 1):
         at = np.flatnonzero(group.ravel() == g)
         P, sv, _ = np.linalg.svd(values[at], full_matrices=False)
@@ -66,7 +66,7 @@ def point_combinations(model) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         block[at] = np.sqrt(w[at])[:, None] * P
         columns.append(block)
         representative += [at[0]] * P.shape[1]
-    return x3, np.concatenate(columns, axis=1), np.array(representative)
+    return x3, np.concatenate(columns, axis=1), excess[:, representative]
 
 
 def rank_bound(model) -> int:
@@ -79,8 +79,7 @@ class CutoutWoodbury:
 
     def __init__(self, model, a0: float):
         S = model.systems
-        x3, combine, representative = point_combinations(model)
-        excess = cutout_points(model)[2][:, representative]
+        x3, combine, excess = point_combinations(model)
         dofs = cutout_dofs(model)
         n_dof = len(dofs)
         self.series = DofSeries(model, dofs, x3, np.ones(combine.shape[1]), combine)  # at the combinations
@@ -101,9 +100,8 @@ class CutoutWoodbury:
         # S = I - V A_h^-1 V' = I - sum_l W_l G_l W_l', G_l the cut-out dofs' block of A_l^-1
         # one solve with the block-diagonal factors and a column per cut-out dof, unit in every
         # mode's block at once (the blocks do not mix), gives every mode's block of A^-1 there
-        columns = self.base.solve(sp.vstack([Ei.T for Ei in E]).toarray())
-        offsets = np.cumsum([0] + [Ei.shape[1] for Ei in E])
-        G = np.stack([Ei @ columns[lo:hi] for Ei, lo, hi in zip(E, offsets[:-1], offsets[1:])])  # (modes, dofs, dofs)
+        columns, o = self.base.solve(sp.vstack([Ei.T for Ei in E]).toarray()), model.offsets
+        G = np.stack([Ei @ columns[o[i]:o[i + 1]] for i, Ei in enumerate(E)])  # (modes, dofs, dofs)
         capacitance = np.eye(F.shape[0] * F.shape[2]) - self._correction(F, G, dofs)
         # S^-1 itself (its lower triangle), applied by one symmetric product a solve: it reads the
         # triangle once where the Cholesky factor's two triangular solves read it twice and run

@@ -269,9 +269,9 @@ def test_the_woodbury_form_at_fewer_point_combinations_solves_as_at_the_points(m
     a0 = Constants.of(case.dt).a0
     b = np.random.default_rng(1).normal(size=model.n_dof)
     combined = woodbury.CutoutWoodbury(model, a0)
-    x3, w, _ = woodbury.cutout_points(model)
+    x3, w, excess = woodbury.cutout_points(model)
     # each point by itself, weighted: the form before the combinations
-    monkeypatch.setattr(woodbury, "point_combinations", lambda m: (x3, np.diag(np.sqrt(w)), np.arange(len(x3))))
+    monkeypatch.setattr(woodbury, "point_combinations", lambda m: (x3, np.diag(np.sqrt(w)), excess))
     points = woodbury.CutoutWoodbury(model, a0)
     assert combined.F.shape[0] < points.F.shape[0] == len(x3) and combined.rank < points.rank
     x, y = combined.solve(b), points.solve(b)
