@@ -326,7 +326,7 @@ def _build(names: tuple[str, ...], out, full: bool, workers: int, progress: bool
 
     threads.pin()
     plan = select(full_plan() if full else quick(), names, full)
-    timing = None if timing_budget_s is None else TimingRule.of(full, timing_budget_s)
+    timing = None if timing_budget_s is None else TimingRule.of(full, timing_budget_s, retime)
     return build(plan, Path(out), cache=cache and Path(cache), scheduler=scheduler, workers=workers,
                  progress=progress, settings="full" if full else "quick", document=document, timing=timing,
                  retime=retime)

@@ -160,3 +160,15 @@ def test_solver_options_come_from_set_and_are_recorded(tmp_path, capsys):
         err = capsys.readouterr().err
         assert needle in err and len(err.strip().splitlines()) == 1, err
     assert not (tmp_path / "bad").exists()
+
+
+def test_every_subcommands_help_is_printed():
+    """argparse expands ``%`` in help texts only when asked for --help: a stray one fails there."""
+    import argparse
+
+    from smfem.cli import build_parser
+
+    parser = build_parser()
+    subparsers = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for name, sub in subparsers.choices.items():
+        assert name in parser.format_help() and sub.format_help().startswith("usage: smfem " + name)

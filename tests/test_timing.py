@@ -20,23 +20,32 @@ def test_a_run_is_done_at_three_repeats_and_two_cpu_seconds_and_a_long_one_once_
     assert not rule.done([0.1] * 19, 1.9) and rule.done([0.1] * 20, 2.0)
     assert not rule.done([61.0], 61.0) and rule.done([61.0, 60.5], 121.5)
     assert rule.done([61.0], 61.0 + 80.0)  # a second timing would pass the budget
-    assert rule.batch([]) == 1 and rule.batch([5.0]) == 1
-    assert rule.batch([0.01]) == 25  # a quarter of a CPU s per round trip, not 199 repeats at once
-    assert rule.batch([0.2] * 9) == 1 and rule.batch([0.01] * 190) == 10
+    # the minimum must hold: a second repeat within 5 % of it, up to nine repeats or the budget
+    assert not rule.done([1.0, 1.3, 1.4], 3.7) and rule.done([1.0, 1.3, 1.4, 1.04], 4.74)
+    assert not rule.done([1.0] + [1.3] * 7, 10.1) and rule.done([1.0] + [1.3] * 8, 11.4)
+    assert rule.done([1.0, 1.3, 1.4], 201.0)
+    assert rule.batch([], 0) == 1 and rule.batch([5.0], 1) == 1
+    # a 10 ms run wants 199 more: shared among the three sweeps left, all at once in the last
+    assert rule.batch([0.01], 1) == 67 and rule.batch([0.01], 3) == 199 and rule.batch([0.01], 9) == 199
+    assert rule.batch([0.2] * 9, 2) == 1 and rule.batch([0.01] * 190, 2) == 5
 
 
-def test_a_scenes_runs_are_timed_by_turns_and_each_until_the_rule_holds():
+def test_a_scenes_runs_are_timed_by_turns_in_sweeps_over_every_scene_until_the_rule_holds():
     smfem, other, third = (Job("dome", s, ()) for s in ("smfem", "reference-2d", "reference-3d"))
-    cost = {smfem: 0.5, other: 1.5, third: 70.0}
-    order = []
+    fast = Job("rod_impact", "smfem", ())
+    cost = {smfem: 0.5, other: 1.5, third: 70.0, fast: 0.01}
+    calls = []
 
     def run(job, repeats):
-        order.extend([job.solver] * repeats)
+        calls.append((job, repeats))
         return [cost[job]] * repeats
 
-    timings = retime([[smfem, other], [third]], TimingRule(budget_s=200.0), run=run, progress=False)
-    assert order[:4] == ["smfem", "reference-2d", "smfem", "reference-2d"]
-    assert [timings[j].repeats for j in (smfem, other, third)] == [4, 3, 2]
+    timings = retime([[smfem, other], [third], [fast]], TimingRule(budget_s=200.0), run=run, progress=False)
+    # sweep 1 times each run once, scene by scene, the scene's runs by turns; sweep 2 comes back
+    assert [job for job, _ in calls[:6]] == [smfem, other, third, fast, smfem, other]
+    assert [timings[j].repeats for j in (smfem, other, third, fast)] == [4, 3, 2, 200]
+    # the 10 ms run's repeats are spread over the four sweeps, not taken in one go
+    assert [n for job, n in calls if job is fast] == [1, 67, 66, 66]
     timings = retime([[third]], TimingRule(budget_s=100.0), run=run, progress=False)
     assert timings[third].repeats == 1  # over a minute, and a second timing would pass the budget
 
@@ -49,9 +58,10 @@ def test_retime_without_the_reports_runs_is_a_usage_error(tmp_path, capsys):
 
 def test_the_quick_settings_keep_the_study_shot_of_a_dear_run():
     """A quick report times only the runs whose study shot took at most 10 s (the cheap side of
-    its ratios); a dearer run's shot stands as zero repeats. A full one times every run."""
+    its ratios); a dearer run's shot stands as zero repeats. A full one, and a retime, time every run."""
     quick, full = TimingRule.of(False), TimingRule.of(True)
     assert quick.kept(10.5) and not quick.kept(9.5) and not full.kept(1e6)
+    assert not TimingRule.of(False, retime=True).kept(1e6)  # a retime times the dear runs too
     job = Job("dome", "reference-3d", ())
     kept = Timing(job, (30.9,), retimed=False)
     assert kept.repeats == 0 and kept.cpu_min == kept.cpu_max == 30.9

@@ -25,8 +25,8 @@ def add(sub) -> None:
     _timing(report)
     report.add_argument("--retime", action="store_true",
                         help="redo only the timing pass on the report in --out (its run cache, the same scenes and "
-                             "--quick/--full): runs no solver but the re-timed runs, and writes the tables and "
-                             "index.html, report.pdf again")
+                             "--quick/--full): runs no solver but the re-timed runs, every run behind the headline, "
+                             "the dear ones too, and writes the tables and index.html, report.pdf again")
     report.add_argument("--publish", default=None, metavar="DIR",
                         help="also keep tables/headline.csv, fronts.csv, carried.csv, timing.csv and run.json (wall time, machine, "
                              "peak memory) in DIR: the findings README quotes (docs/full-report for --full)")
@@ -39,11 +39,11 @@ def _timing(parser) -> None:
     rule = TimingRule()
     parser.add_argument("--timing-budget", type=float, default=BUDGET_S, metavar="SECONDS",
                         help=f"the timing pass after the runs times each run behind the headline again, alone and "
-                             f"by turns with its competitor, to {rule.repeats} repeats and {rule.total_s:g} CPU s "
-                             f"(tables/timing.csv); a run over {rule.long_s:g} s is timed once, and once more while "
+                             f"by turns with its competitor, to {rule.repeats} repeats, {rule.total_s:g} CPU s and a "
+                             f"second repeat within {100 * rule.hold:g} %% of its minimum (tables/timing.csv); a run over {rule.long_s:g} s is timed once, and once more while "
                              f"the pass stays within this many CPU s (default {BUDGET_S:g}); 0: never twice. The "
                              f"quick settings time only runs whose study shot took at most "
-                             f"{TimingRule.of(False).kept_s:g} s: a dearer run's shot stands (0 repeats)")
+                             f"{TimingRule.of(False).kept_s:g} s: a dearer run's shot stands (0 repeats; --retime times it)")
     parser.add_argument("--no-timing", action="store_true",
                         help="no timing pass: the headline keeps the study's single-shot CPU times")
 

@@ -3,11 +3,15 @@
 A study runs two workers side by side on a shared host and times each run once: a speed-up
 whose cheap side takes 0.1-1 s then moves by a factor of two from one report to the next. The
 pass repeats each decisive run, in the manner of timeit's autorange and pyperf, with no other
-run on the machine: one worker process, one run at a time. A scene's runs are interleaved
-(SMFEM, competitor, SMFEM, competitor, ...) so that a drift of the host hits both sides of a
-ratio. Each run is repeated until it has :attr:`TimingRule.repeats` repeats and
-:attr:`TimingRule.total_s` CPU s in all; a run over :attr:`TimingRule.long_s` is timed once,
-and once more while the pass stays within :attr:`TimingRule.budget_s`. The CPU time is the
+run on the machine: one worker process, one run at a time. The pass goes over every scene in
+sweeps, and a run's repeats are spread over at least :attr:`TimingRule.sweeps` of them, so its
+minimum is taken over the whole pass, not over the minute its scene happened to meet; within a
+scene the runs are interleaved (SMFEM, competitor, SMFEM, competitor, ...) so that a drift of
+the host hits both sides of a ratio. Each run is repeated until it has
+:attr:`TimingRule.repeats` repeats and :attr:`TimingRule.total_s` CPU s in all, and a second
+repeat within :attr:`TimingRule.hold` of its minimum (a minimum seen once is luck); a run over
+:attr:`TimingRule.long_s` is timed once, and once more while the pass stays within
+:attr:`TimingRule.budget_s`. The CPU time is the
 solve's process time as the run measured it in the study (``RunResult.cpu_time_s``, one BLAS
 thread); which runs decide the headline is the report's to say (:mod:`reports.timing`).
 """
@@ -39,13 +43,20 @@ class TimingRule:
     repeats: int = 3
     #: ... and at least this much CPU in all, s
     total_s: float = 2.0
+    #: ... and its minimum must hold: a second repeat within this share of it (a lone fast repeat,
+    #: 0.74 of its run's median, moved a speed-up by a third from one pass to the next) ...
+    hold: float = 0.05
+    #: ... until this many repeats, or the pass's CPU passes :attr:`budget_s`
+    max_repeats: int = 9
     #: a run over this many CPU s is timed once ...
     long_s: float = 60.0
     #: ... and once more while the whole pass's CPU, with that repeat, stays within this, s
     budget_s: float = BUDGET_S
-    #: repeats of a shorter run go to the worker together, as many as fill this many CPU s: a
-    #: round trip to the worker (about 0.2 s) would otherwise cost more than a 10 ms run
-    batch_s: float = 0.25
+    #: a run's repeats are spread over at least this many sweeps of the pass (over every scene),
+    #: the repeats of a sweep going to the worker together: a host that slows for a minute then
+    #: raises one sweep's times, not a run's minimum (two passes whose scenes each met their own
+    #: minute of the host disagreed by up to 1.6 times)
+    sweeps: int = 4
     #: a run whose study shot took over this many CPU s is not timed again: the shot stands, as
     #: zero repeats (the quick report: its dearest competitor runs, 7 of 43, would take 137 of the
     #: pass's 330 CPU s and bring the report past ten minutes); None: every run is timed
@@ -56,10 +67,12 @@ class TimingRule:
         return self.kept_s is not None and study_cpu_s > self.kept_s
 
     @classmethod
-    def of(cls, full: bool, budget_s: float = BUDGET_S) -> "TimingRule":
+    def of(cls, full: bool, budget_s: float = BUDGET_S, retime: bool = False) -> "TimingRule":
         """The rule of a full report (every decisive run timed) or a quick one (runs over 10 s
-        keep their study shot: the cheap side of a ratio, which moved it by two, is timed)."""
-        return cls(budget_s=budget_s) if full else cls(budget_s=budget_s, kept_s=10.0)
+        keep their study shot: the cheap side of a ratio, which moved it by two, is timed). A
+        retime has no study to pay for and times every run: a kept shot does not follow the host
+        as the run's SMFEM side does (one stood still while the host slowed by a third)."""
+        return cls(budget_s=budget_s) if full or retime else cls(budget_s=budget_s, kept_s=10.0)
 
     def done(self, times: list[float], spent: float) -> bool:
         """Whether a run timed ``times`` (CPU s) needs no more repeats, ``spent`` CPU s into the pass."""
@@ -67,14 +80,21 @@ class TimingRule:
             return False
         if times[0] > self.long_s:
             return len(times) >= 2 or spent + times[0] > self.budget_s
-        return len(times) >= self.repeats and sum(times) >= self.total_s
+        if len(times) < self.repeats or sum(times) < self.total_s:
+            return False
+        return self.held(times) or len(times) >= self.max_repeats or spent > self.budget_s
 
-    def batch(self, times: list[float]) -> int:
-        """How many repeats to take in one go after ``times`` (one before the run's time is known)."""
+    def held(self, times: list[float]) -> bool:
+        """Whether two of ``times`` lie within :attr:`hold` of their minimum."""
+        return sum(t <= min(times) * (1 + self.hold) for t in times) >= 2
+
+    def batch(self, times: list[float], sweep: int) -> int:
+        """How many repeats to take in sweep ``sweep`` (from 0) after ``times``: one before the
+        run's time is known, then what is still wanted shared among the sweeps left."""
         if not times:
             return 1
         wanted = max(self.repeats - len(times), math.ceil((self.total_s - sum(times)) / min(times)), 1)
-        return max(1, min(wanted, int(self.batch_s / min(times))))
+        return math.ceil(wanted / max(self.sweeps - sweep, 1))
 
 
 @dataclass(frozen=True)
@@ -120,20 +140,20 @@ def retime(groups: list[list[Job]], rule: TimingRule = TimingRule(), run=in_one_
            progress: bool = True) -> dict[Job, Timing]:
     """Each job of ``groups`` timed by ``run(job, repeats) -> [CPU s]`` until ``rule`` is met.
 
-    ``groups``: one list per scene, in the order to interleave (SMFEM, competitor, SMFEM, ...);
-    a scene's jobs are timed in rounds, each round running every job of the scene that still
-    needs a repeat once (a short one :meth:`TimingRule.batch` times), in that order, so that the
-    two sides of a ratio see the same host.
+    ``groups``: one list per scene, in the order to interleave (SMFEM, competitor, SMFEM, ...).
+    The pass sweeps over the scenes, each sweep running every job that still needs a repeat
+    (:meth:`TimingRule.batch` times), scene by scene in that order: the two sides of a ratio see
+    the same host, and a run's repeats the whole pass.
     """
     times: dict[Job, list[float]] = {job: [] for group in groups for job in group}
-    spent = 0.0
+    spent, sweep = 0.0, 0
     with Progress(len(times), "timing", "run", enabled=progress) as bar:
-        for group in groups:
-            while left := [job for job in group if not rule.done(times[job], spent)]:
-                for job in left:
-                    cpu = run(job, rule.batch(times[job]))
+        while any(not rule.done(t, spent) for t in times.values()):
+            for group in groups:
+                for job in [job for job in group if not rule.done(times[job], spent)]:
+                    cpu = run(job, rule.batch(times[job], sweep))
                     times[job] += cpu
                     spent += sum(cpu)
-                finished = sum(rule.done(t, spent) for t in times.values() if t)
-                bar.update(finished, f"{left[-1].scene}: {max(len(times[j]) for j in left)} repeats")
+                    bar.update(sum(rule.done(t, spent) for t in times.values()), f"sweep {sweep + 1}: {job.scene}")
+            sweep += 1
     return {job: Timing(job, tuple(t)) for job, t in times.items()}
