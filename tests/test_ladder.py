@@ -125,3 +125,15 @@ def test_a_level_carries_a_solver_option_to_its_job_and_its_ladder_orders_by_it(
     assert "modes" not in ladder.jobs[0].resolved.params
     assert Run(ladder.jobs[1], "ok", "", None).label == "r2 modes 50"
     assert work(ladder.params[2], False) == pytest.approx(16 * work(ladder.params[1], False))
+
+
+def test_a_3d_runs_size_counts_the_elements_round_its_ring_and_a_mirror_half():
+    from reference_fem.mesh import N_THETA
+    from smfem.studies.ladder import THETA_PER_REFINE, size
+
+    assert THETA_PER_REFINE == N_THETA  # the reference's ring at refine 1
+    assert size({"dim": 3, "refine": 2}, False) == size({"dim": 3, "refine": 2, "theta_elements": 2 * N_THETA}, False) == 8
+    half = {"dim": 3, "mirror": True}
+    assert size(half | {"theta_elements": 32}, False) == pytest.approx(4 / 3 * size(half | {"theta_elements": 24}, False))
+    assert size(half | {"theta_elements": 32}, False) == pytest.approx(0.25)
+    assert size({"refine": 2, "theta_elements": 32}, False) == 4  # 2D: no ring

@@ -21,11 +21,23 @@ from .jobs import Job
 from .plan import Series
 
 
+#: the 3D reference's elements round a ring at refine 1 (``reference_fem.mesh.N_THETA``; the
+#: studies read the solvers' parameters, not their numerics: a test holds the two equal)
+THETA_PER_REFINE = 64
+
+
 def size(params: dict, per_harmonic: bool) -> float:
     """What a run's unknowns grow with, in the case's parameters: the section's (or body's)
-    elements, ``refine ** dim`` over ``coarsen ** dim``, and for a harmonic solver the harmonics."""
+    elements, ``refine ** dim`` over ``coarsen ** dim`` (in 3D the ring's count from
+    ``theta_elements`` where set, halved for a ``mirror`` half), and for a harmonic solver the
+    harmonics."""
     dim = params.get("dim", 2)
-    cells = (params.get("refine", 1) / params.get("coarsen", 1)) ** dim
+    scale = params.get("refine", 1) / params.get("coarsen", 1)
+    cells = scale ** dim
+    if dim == 3 and params.get("theta_elements"):
+        cells = scale ** 2 * params["theta_elements"] / THETA_PER_REFINE
+    if dim == 3 and params.get("mirror"):
+        cells /= 2
     return cells * (max(params.get("harmonics", 1), 1) if per_harmonic else 1)
 
 
