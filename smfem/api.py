@@ -291,18 +291,19 @@ def error(result: Result, against=None) -> float:
 
 def study(scenes: list[str] | tuple[str, ...], out: str | Path = "out/study", *, full: bool = False,
           workers: int = 2, progress: bool = True, cache: str | Path | None = None, scheduler: str | None = None,
-          timing_budget_s: float | None = TIMING_BUDGET_S):
+          timing_budget_s: float | None = TIMING_BUDGET_S, solvers: tuple[str, ...] = ()):
     """Series of runs of ``scenes`` (built-in names, or scene files ``*.toml``: a study made for
-    each, :mod:`smfem.studies.own_scene`) with every solver, their errors against the truth and
-    the work-precision diagrams, as ``smfem study`` makes them (``out/tables/*.csv``,
-    ``out/figures/``). Returns the :class:`reports.build.Report`: ``tables`` (name -> DataFrame),
+    each, :mod:`smfem.studies.own_scene`) with every solver (``solvers``: only these), their
+    errors against the truth and the work-precision diagrams, as ``smfem study`` makes them
+    (``out/tables/*.csv``, ``out/figures/``). Returns the :class:`reports.build.Report`: ``tables`` (name -> DataFrame),
     ``analyses`` (per scene), ``study`` (executed and cached runs). ``cache``: the run cache
     (default ``out/runs``; a run found there is read, not run); ``scheduler``: a dask
     scheduler's address (``tcp://host:8786``) to run on instead of ``workers`` local processes.
     After the runs, the timing pass times the runs behind the headline again (:mod:`reports.timing`;
     ``tables/timing.csv``); ``timing_budget_s``: the CPU s it may spend on a second timing of runs
     over a minute; None: no pass, the study's single-shot CPU times."""
-    return _build(tuple(scenes), out, full, workers, progress, False, cache, scheduler, timing_budget_s)
+    return _build(tuple(scenes), out, full, workers, progress, False, cache, scheduler, timing_budget_s,
+                  solvers=tuple(solvers))
 
 
 def report(out: str | Path = "out/report", *, full: bool = False, scenes: tuple[str, ...] = (), workers: int = 2,
@@ -318,14 +319,14 @@ def report(out: str | Path = "out/report", *, full: bool = False, scenes: tuple[
 
 
 def _build(names: tuple[str, ...], out, full: bool, workers: int, progress: bool, document: bool, cache, scheduler,
-           timing_budget_s: float | None, retime: bool = False):
+           timing_budget_s: float | None, retime: bool = False, solvers: tuple[str, ...] = ()):
     from reports.build import build
     from smfem.studies.own_scene import select
-    from smfem.studies.plan import full as full_plan, quick
+    from smfem.studies.plan import full as full_plan, quick, with_solvers
     from smfem.studies.timing import TimingRule
 
     threads.pin()
-    plan = select(full_plan() if full else quick(), names, full)
+    plan = with_solvers(select(full_plan() if full else quick(), names, full), solvers)
     timing = None if timing_budget_s is None else TimingRule.of(full, timing_budget_s, retime)
     return build(plan, Path(out), cache=cache and Path(cache), scheduler=scheduler, workers=workers,
                  progress=progress, settings="full" if full else "quick", document=document, timing=timing,

@@ -8,7 +8,7 @@ import shutil
 
 import pytest
 
-from cases import UnsupportedCase, get_case
+from cases import ParameterError, UnsupportedCase, get_case
 from reference_fem.calculix.procedures import refuse
 from smfem.runs.registry import CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, lookup
 from smfem.studies.plan import CCX_EXPLICIT, CCX_MODAL, FULL_UNTIL, full, quick
@@ -55,3 +55,21 @@ def test_the_quick_plan_has_a_light_calculix_series_only_where_ccx_is_found(foun
     assert light == ({"dome": ({"refine": 1, "modes": 50}, {"refine": 2, "modes": 50}), "thick_cylinder": two,
                       "layered_cylinder_pulse": two, "moving_load": two} if found else {})
     assert not any(s.solver == CALCULIX_EXPLICIT for study in quick() for s in study.series)
+
+
+def test_a_study_of_some_solvers_keeps_only_their_series_and_refuses_an_unknown_one(tmp_path, capsys):
+    from smfem.cli import main
+    from smfem.studies.plan import full, with_solvers
+
+    plan = full()
+    kept = with_solvers(plan, ("smfem", "reference-2d"))
+    assert with_solvers(plan, ()) is plan
+    assert {s.solver for study in kept for s in study.series} == {"smfem", "reference-2d"}
+    assert [study.case for study in kept] == [study.case for study in plan]
+    dome = next(s for s in kept if s.case == "dome")
+    assert dome.reference[0] == "reference-2d" and set(dome.estimated) <= {"smfem", "reference-2d"}
+    assert all(s.reference is None for s in with_solvers(plan, ("smfem",)))
+    with pytest.raises(ParameterError, match="no series of solver 'reference-4d'"):
+        with_solvers(plan, ("smfem", "reference-4d"))
+    assert main(["study", "dome", "--solvers", "nonsense", "--out", str(tmp_path / "s"), "--quiet"]) == 2
+    assert "no series of solver 'nonsense'" in capsys.readouterr().err and not (tmp_path / "s").exists()

@@ -14,6 +14,9 @@ def add(sub) -> None:
     study.add_argument("cases", nargs="+", metavar="CASE", help="built-in scenes or scene files (NAME.toml: a "
                                                                 "study made for the scene, docs/usage.md)")
     add_study_options(study, "out/study")
+    study.add_argument("--solvers", nargs="+", default=(), metavar="SOLVER",
+                       help="only these solvers' series (names as in tables/fronts.csv: smfem reference-2d ...): "
+                            "SMFEM against one competitor without the others' runs")
     _store_fronts(study)
     _timing(study)
     study.set_defaults(handler=command)
@@ -82,7 +85,7 @@ def command(args) -> int:
         else:
             report = api.study(out=out, full=args.full, scenes=tuple(args.cases), cache=args.cache,
                                scheduler=args.scheduler, workers=args.workers, progress=not args.quiet,
-                               timing_budget_s=budget)
+                               timing_budget_s=budget, solvers=tuple(args.solvers))
     except (SchedulerUnreachable, NotInCache) as exc:
         raise UsageError(str(exc)) from None
     for line in headline_lines(report.tables["headline"]):

@@ -549,3 +549,18 @@ def select(plan: tuple[CaseStudy, ...], names) -> tuple[CaseStudy, ...]:
         raise ParameterError(f"unknown case {unknown[0]!r}: choose one of {', '.join(by_name)} or give a scene "
                              "file NAME.toml")
     return tuple(by_name[n] for n in names)
+
+
+def with_solvers(plan: tuple[CaseStudy, ...], solvers) -> tuple[CaseStudy, ...]:
+    """``plan`` with only the series of ``solvers`` (all when empty), and the same-dt reference
+    run and error estimates where their solver is among them: SMFEM against one competitor
+    without the hours of the others (``smfem study --solvers``)."""
+    if not solvers:
+        return plan
+    known = sorted({s.solver for study in plan for s in study.series})
+    unknown = [n for n in solvers if n not in known]
+    if unknown:
+        raise ParameterError(f"no series of solver {unknown[0]!r} in this study: choose among {', '.join(known)}")
+    return tuple(replace(study, series=tuple(s for s in study.series if s.solver in solvers),
+                         reference=study.reference if study.reference and study.reference[0] in solvers else None,
+                         estimated=tuple(e for e in study.estimated if e in solvers)) for study in plan)
