@@ -83,6 +83,9 @@ def test_the_3d_row_is_the_cheaper_engine_at_each_target_named_in_its_cell_and_t
     assert sentence("thick_cylinder", head.set_index("solver")).endswith(
         ": 30 times faster than the 3D reference (explicit).")
     assert summary_table(head)[2] == "| thick_cylinder | 1 % | 2 | - | 30 (explicit) |"
+    from smfem.cli.study import headline_lines
+
+    assert headline_lines(head)[0].endswith("; speed-up over reference-3d 30x (explicit)")
     # the implicit engine cheaper at 1 %, neither engine within 0.5 %: the closest named
     implicit = _analysis("dome", _series(SMFEM, ("r1", 0.5, 0.03), ("r2", 2.0, 0.008)),
                          _series(REF3D, ("r2", 40.0, 0.009)), _series(REF3D_EXPLICIT, ("r2", 300.0, 0.0095)))
