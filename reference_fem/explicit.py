@@ -80,6 +80,16 @@ def largest_frequency(K: sp.spmatrix, m: np.ndarray) -> float:
     return float(np.sqrt(w2))
 
 
+def refuse(case) -> None:
+    """What the engine cannot take, in one line (:class:`cases.UnsupportedCase`), before any work:
+    another time scheme's option, a rigid wall with plasticity or with friction."""
+    newmark_only(case, "explicit reference")
+    if case.wall is not None and case.material.plastic:
+        raise UnsupportedCase("explicit reference: contact with plasticity is not available")
+    if case.wall is not None and case.wall.friction > 0:
+        raise UnsupportedCase("explicit reference: a wall with friction is not available (frictionless only)")
+
+
 def critical_step(omega_max: float) -> float:
     """Stability limit of undamped central differences, ``2 / omega_max`` (s)."""
     return 2.0 / omega_max
@@ -157,11 +167,7 @@ class _Wall:
     """The rigid wall as a kinematic constraint on the face nodes' free dofs."""
 
     def __init__(self, model: Model):
-        case = model.case
-        if case.material.plastic:
-            raise UnsupportedCase("explicit reference: contact with plasticity is not available")
-        if case.wall.friction > 0:
-            raise UnsupportedCase("explicit reference: a wall with friction is not available (frictionless only)")
+        case = model.case  # (what the engine cannot take it refused before: refuse)
         face = plane_face(model, case.wall.edge)
         dim = model.dim
         where = np.full(model.basis.N, -1)
@@ -319,7 +325,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
 
     if step_divisor < 1:
         raise ValueError("step_divisor must be a positive integer")
-    newmark_only(case, "explicit reference")
+    refuse(case)
     cpu0 = time.process_time()
     rmesh = build_mesh(case, grading)
     cpu_mesh = time.process_time() - cpu0

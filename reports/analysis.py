@@ -98,9 +98,10 @@ class CaseAnalysis:
         return {t: metrics.cheapest(c[t] for c in costs) for t in costs[0]}
 
     def competitors(self) -> dict[str, SolverSummary]:
-        """The headline's rows: a solver's series each, but one row for the series of a solver's
-        procedures (:func:`smfem.runs.registry.headline_name`: CalculiX's), at each target the
-        cheapest of them (:func:`merged`); a solver not installed here is no row."""
+        """The headline's rows: a solver's series each, but one row for the series that share one
+        (:func:`smfem.runs.registry.headline_name`: CalculiX's procedures, the 3D reference's two
+        engines), at each target the cheapest of them (:func:`merged`); a solver not installed
+        here is no row."""
         groups: dict[str, dict] = {}
         for solver, s in self.solvers.items():
             if s.status != NOT_INSTALLED:
@@ -125,7 +126,7 @@ class CaseAnalysis:
 
 
 def merged(name: str, series: dict[str, SolverSummary]) -> SolverSummary:
-    """One headline row ``name`` of ``series`` (solver -> summary; one solver's procedures): at
+    """One headline row ``name`` of ``series`` (solver -> summary; one solver's procedures or engines): at
     each target the cheapest that reaches it, else the one that came closest
     (:func:`smfem.studies.metrics.cheapest`), its cell naming the series' :attr:`variant
     <smfem.runs.registry.Solver.variant>` (``modal r2 modes 50``); every run's point; where

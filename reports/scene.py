@@ -160,6 +160,7 @@ def scene(ctx, an: CaseAnalysis) -> Section:
         blocks.append(table(headline_rows(head, name)))
     unlisted = [f"{s}: {v.status}: {v.message}" for s, v in an.solvers.items() if v.status == NOT_INSTALLED]
     unlisted += an.left_out()  # a procedure that cannot take the scene, beside one that did
+    unlisted += [f"{lookup(solver).label}: not run: {why}" for solver, why in an.runs.study.left_out]
     if unlisted:  # not a row of the table: said here
         blocks.append(items(unlisted))
     ran = [solver for solver, s in an.solvers.items() if s.status == OK]

@@ -92,9 +92,12 @@ def headline(ctx: ReportContext) -> list[Section]:
           "within the target, with its settings; 'not reached' gives the best error. A target below "
           f"{TRUTH_MARGIN:g} times the truth's uncertainty is 'truth not fine enough': no run can be said to reach it. "
           "SMFEM's speed-up is that solver's CPU time over SMFEM's at the same target ('>' when the solver does not "
-          "reach it even at its dearest run, '<' when SMFEM does not). CPU time is the solve's process time (model "
-          "building, factorization, time stepping), one thread. The runs within a target were timed again after "
-          "the study, one at a time with nothing else running, SMFEM's and the other's by turns (the timing pass, "
+          "reach it even at its dearest run, '<' when SMFEM does not). A solver of several series is one row: "
+          "CalculiX's procedures, and the 3D reference's implicit and explicit engines; at each target the row "
+          "holds the cheapest of its series, named in the cell, and the speed-up is over that one. CPU time is "
+          "the solve's process time (model building, factorization, time stepping), one thread. The runs within a "
+          "target were timed again after the study, one at a time with nothing else running, SMFEM's and the "
+          "other's by turns (the timing pass, "
           "tables/timing.csv): their CPU time is the minimum over the repeats and each speed-up a ratio of minima, "
           "with its range over the repeats beside it (the other's fastest over SMFEM's slowest to the other's "
           "slowest over SMFEM's fastest). A reason in a cell is a numbered note under its table."),
@@ -231,6 +234,11 @@ def methods(ctx: ReportContext) -> list[Section]:
         "ALPHA = 0 at the case's dt (plastic scenes: ccx's own increments of at most dt, interpolated onto "
         "the dt grid); its plastic strains are nodal PEEQ (accumulated), not the cases' sqrt(2/3 eps_p:eps_p). "
         "Its CPU time is ccx's own. A scene with a rigid wall is not solved (the scene's rows say why).",
+        "The 3D reference's explicit engine (the full settings' series 'reference FEM 3D, explicit'): the implicit "
+        "engine's 27-node mesh and element, central differences on the HRZ-lumped mass at half the mesh's "
+        "critical step (its own Courant limit: the case's dt is its output interval only), so its levels are "
+        "meshes. The headline's 3D row is the cheaper engine at each target; each engine keeps its own runs "
+        "in the appendix and tables/fronts.csv.",
         "Observed order: slope of log(error) against log(h), h = dt at a fixed mesh, or dof^(-1/2) at the "
         "case's time step. An order near zero or negative means the refined parameter does not limit the "
         "error there (at a fixed mesh, the space error dominates; the orders table says so per row).",

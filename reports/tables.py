@@ -126,13 +126,14 @@ def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | No
 def headline_table(analyses: list[CaseAnalysis]) -> pd.DataFrame:
     """Per case and solver: the truth and its uncertainty, the best total error, the CPU time
     (and settings) of the cheapest run reaching each target, and SMFEM's speed-up there; the
-    series of one solver's procedures (CalculiX's) one row, at each target the cheapest
-    procedure, named in the cell (:meth:`reports.analysis.CaseAnalysis.competitors`)."""
+    series of one solver's procedures (CalculiX's) or engines (the 3D reference's implicit and
+    explicit) one row, at each target the cheapest, named in the cell
+    (:meth:`reports.analysis.CaseAnalysis.competitors`)."""
     rows = []
     for an in analyses:
         mine = an.smfem_costs()
         truth = an.truth.name if an.truth is not None else "none available"
-        # CalculiX's procedures one row; a solver not installed is named in the case's section
+        # CalculiX's procedures one row, the 3D engines one; a solver not installed is named in the case's section
         for solver, s in an.competitors().items():
             row = {"case": an.case.name, "solver": solver, "truth": truth,
                    "truth_uncertainty_pct": 100 * an.truth_uncertainty, "runs": len(s.points),
@@ -229,7 +230,8 @@ def write_tables(analyses: list[CaseAnalysis], out: Path, timing: pd.DataFrame |
     (out / "README.txt").write_text(
         f"headline.csv: per case and solver, CPU time (s) of the cheapest run within {targets} total error\n"
         "  against the case's truth, its settings, and SMFEM's speed-up (calculix: the cheapest of its\n"
-        "  procedures at each target, named in the cell; fronts.csv has each procedure's runs); each CPU time\n"
+        "  procedures at each target, named in the cell; reference-3d: the cheaper of its implicit and explicit\n"
+        "  engines, named so; fronts.csv has each procedure's and engine's runs); each CPU time\n"
         "  of a run within the target is the minimum over the timing pass's repeats (timing.csv), each speed-up a\n"
         "  ratio of minima, and smfem_speedup_*_range its range over the repeats (the other's fastest over\n"
         "  SMFEM's slowest to the other's slowest over SMFEM's fastest); a bound (> x) keeps the study's single\n"

@@ -13,26 +13,49 @@ import re
 
 import pandas as pd
 
-from smfem.runs.registry import lookup
+from smfem.runs.registry import lookup, solvers
 
 from smfem.studies.metrics import TARGETS, TRUTH_TOO_COARSE
 from smfem.studies.plan import SMFEM
 
 _SPEEDUP = re.compile(r"^([<>]?)\s*([0-9.]+(?:e[+-]?[0-9]+)?)x$")  # 1.05e+03x: a thousand times and more
 _COST = re.compile(r"^([0-9.e+-]+) \((.*)\)$")
+#: the first word of a cost cell's settings (``98.6 (implicit r3 dt2.5e-06)``), or the series a
+#: missed target's cell names (``not reached (best 5.1 %, explicit)``)
+_NAMED = re.compile(r"^(?:[0-9.e+-]+ \((\S+)|not reached \(best [^,)]*, (\S+)\))")
 
 
 def _pct(target: float) -> str:
     return f"{100 * target:g}pct"
 
 
-def _comparison(solver: str, speedup: str) -> str | None:
-    """``'1.05x faster than the 2D reference'`` from a speed-up cell; None where there is none."""
+def engine(solver: str, cost: str) -> str:
+    """Which of a shared headline row's series a cost cell is (its :attr:`variant
+    <smfem.runs.registry.Solver.variant>`: the 3D reference's ``implicit`` or ``explicit``
+    engine, CalculiX's procedure), '' for a row of one series or a cell that names none."""
+    variants = {s.variant for s in solvers() if s.headline == solver}
+    m = _NAMED.match(str(cost).strip())
+    word = (m.group(1) or m.group(2)) if m else ""
+    return word if len(variants) > 1 and word in variants else ""
+
+
+def names_an_engine(head: pd.DataFrame, solver: str) -> bool:
+    """Some cost cell of ``solver``'s rows in the headline table (``tables/headline.csv``) names
+    which of the row's series it was (:func:`engine`)."""
+    rows = head[head.solver == solver]
+    return any(engine(solver, cost) for c in rows.columns if c.startswith("cpu_s_to_") for cost in rows[c])
+
+
+def _comparison(solver: str, speedup: str, cost: str) -> str | None:
+    """``'1.05x faster than the 2D reference'`` from a speed-up cell, and which engine of a
+    shared row it was (``'... than the 3D reference (explicit)'``, from its ``cost`` cell); None
+    where there is none."""
     m = _SPEEDUP.match(str(speedup).strip())
     if not m:
         return None
     bound, x = m.group(1), float(m.group(2))
-    name = lookup(solver).prose
+    which = engine(solver, cost)
+    name = lookup(solver).prose + (f" ({which})" if which else "")
     if not bound and _even(x):  # 0.999x: "the 2D reference 1 times faster" said nothing
         return f"as fast as {name}"
     if x >= 1:
@@ -88,7 +111,8 @@ def sentence(case: str, rows: pd.DataFrame) -> str:
         solver, cost = cheapest(mine, f"cpu_s_to_{_pct(target)}")
         if cost:
             compared = [c for other, row in others.iterrows()
-                        if (c := _comparison(other, row[f"smfem_speedup_{_pct(target)}"]))]
+                        if (c := _comparison(other, row[f"smfem_speedup_{_pct(target)}"],
+                                             row[f"cpu_s_to_{_pct(target)}"]))]
             missed = "" if target == TARGETS[0] else _missed(mine)
             there = f": {', '.join(compared)}" if compared else ""
             return (f"{case}: {lookup(solver).prose} reaches {100 * target:g} % total error in {cost.group(1)} s CPU "
@@ -118,20 +142,24 @@ def verdict(head: pd.DataFrame) -> list[str]:
     return [sentence(case, rows.set_index("solver")) for case, rows in head.groupby("case", sort=False)]
 
 
-def _speedup_cell(speedup) -> str:
-    """``'435'``, ``'> 19.6'``, ``'0.55 (slower)'`` from a speed-up cell; ``'-'`` where there is none."""
+def _speedup_cell(speedup, which: str = "") -> str:
+    """``'435'``, ``'> 19.6'``, ``'0.55 (slower)'`` from a speed-up cell, with ``which`` engine of
+    a shared row it was (``'435 (implicit)'``, ``'0.55 (slower, explicit)'``); ``'-'`` where
+    there is none."""
     m = _SPEEDUP.match(str(speedup).strip())
     if not m:
         return "-"
     bound, x = m.group(1), float(m.group(2))
-    return f"{bound + ' ' if bound else ''}{_times(x)}" + (" (slower)" if x < 1 and bound != ">" and not _even(x)
-                                                          else "")
+    said = ["slower"] if x < 1 and bound != ">" and not _even(x) else []
+    said += [which] if which else []
+    return f"{bound + ' ' if bound else ''}{_times(x)}" + (f" ({', '.join(said)})" if said else "")
 
 
 def summary_table(head: pd.DataFrame, vs=(("reference-2d", "2D FEM"), ("reference-3d", "3D FEM"))) -> list[str]:
     """The verdict as a Markdown table, one row per scene: the smallest target SMFEM reaches
     (1 % before 5 %), its CPU time with the cheaper element, and its speed-up there over each
-    of ``vs`` (a bound where that solver's series ends above the target)."""
+    of ``vs`` (a bound where that solver's series ends above the target; over the 3D reference
+    the cheaper of its two engines there, named in the cell)."""
     lines = ["| scene | SMFEM reaches | CPU s | " + " | ".join(f"times faster than {n}" for _, n in vs) + " |",
              "|---|---|---|" + "---|" * len(vs)]
     for case, rows in head.groupby("case", sort=False):
@@ -143,7 +171,8 @@ def summary_table(head: pd.DataFrame, vs=(("reference-2d", "2D FEM"), ("referenc
             lines.append(f"| {case} | no target (best {_pct_text(best)}) | - | " + " | ".join("-" for _ in vs) + " |")
             continue
         target, cost = reached
-        cells = [_speedup_cell(others.at[s, f"smfem_speedup_{_pct(target)}"]) if s in others.index else "-"
+        cells = [_speedup_cell(others.at[s, f"smfem_speedup_{_pct(target)}"],
+                               engine(s, others.at[s, f"cpu_s_to_{_pct(target)}"])) if s in others.index else "-"
                  for s, _ in vs]
         lines.append(f"| {case} | {100 * target:g} % | {cost.group(1)} | " + " | ".join(cells) + " |")
     return lines

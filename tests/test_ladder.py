@@ -13,7 +13,7 @@ from smfem.studies.cache import Run
 from smfem.studies.executors import run_jobs
 from smfem.studies.jobs import Job
 from smfem.studies.ladder import Ladder, work
-from smfem.studies.plan import REF3D, SMFEM, CaseStudy, Series, Until, grid
+from smfem.studies.plan import REF3D, REF3D_EXPLICIT, SMFEM, CaseStudy, Series, Until, grid
 from smfem.studies.study import job_of
 
 BASE = {"t_end": 4e-5}
@@ -72,6 +72,19 @@ def test_the_predicted_work_grows_with_cells_steps_and_harmonics():
     # the 3D reference's ladder predicts with dim 3 (its name fixes it)
     three_d = _ladder(Until(), REF3D, grid("dome", ({"refine": 1},), (1, 2)))
     assert [p["dim"] for p in three_d.params] == [3, 3]
+
+
+def test_an_explicit_ladder_predicts_its_courant_steps_too():
+    """An explicit engine steps at its own Courant limit: the next mesh has as many more steps as
+    it is finer, whatever the case's dt (its output interval): r1 -> r2 in 3D is 16 times the work."""
+    dome = {**get_case("dome").params, "dim": 3}
+    assert work({**dome, "refine": 2}, False, courant=True) == pytest.approx(16 * work(dome, False, courant=True))
+    assert work({**dome, "coarsen": 2}, False, courant=True) == pytest.approx(work(dome, False, courant=True) / 16)
+    ladder = _ladder(Until(target=0.01, budget_s=100.0), REF3D_EXPLICIT, ({"refine": 2}, {"refine": 1}))
+    first, second = ladder.jobs
+    assert dict(first.overrides)["refine"] == 1
+    assert ladder.after(first, _run(first, 0.05, 7.0)) == []  # 16 x 7 s = 112 s: past the budget
+    assert "about 112 CPU s" in ladder.outcome
 
 
 def test_until_refuses_a_target_outside_0_1_or_no_budget():

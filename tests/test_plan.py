@@ -1,6 +1,6 @@
 """The plans (smfem/studies/plan.py): CalculiX's procedures in the full plan where each takes the
 scene, refused in one run where it cannot; the quick plan's light CalculiX series only where ccx
-is installed."""
+is installed; the explicit 3D reference in the full plan wherever it takes a scene."""
 
 from __future__ import annotations
 
@@ -10,8 +10,9 @@ import pytest
 
 from cases import ParameterError, UnsupportedCase, get_case
 from reference_fem.calculix.procedures import refuse
-from smfem.runs.registry import CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, lookup
-from smfem.studies.plan import CCX_EXPLICIT, CCX_MODAL, FULL_UNTIL, full, quick
+from reference_fem.explicit import refuse as explicit_refuse
+from smfem.runs.registry import CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, REF3D, REF3D_EXPLICIT, lookup
+from smfem.studies.plan import CCX_EXPLICIT, CCX_MODAL, EXPLICIT_3D, FULL_UNTIL, full, quick
 from smfem.studies.study import job_of
 
 PROCEDURES = {CALCULIX_EXPLICIT: "explicit", CALCULIX_MODAL: "modal"}
@@ -73,3 +74,35 @@ def test_a_study_of_some_solvers_keeps_only_their_series_and_refuses_an_unknown_
         with_solvers(plan, ("smfem", "reference-4d"))
     assert main(["study", "dome", "--solvers", "nonsense", "--out", str(tmp_path / "s"), "--quiet"]) == 2
     assert "no series of solver 'nonsense'" in capsys.readouterr().err and not (tmp_path / "s").exists()
+
+
+def _explicit_takes(case: str) -> bool:
+    try:
+        explicit_refuse(get_case(case, {"dim": 3}))
+    except UnsupportedCase:
+        return False
+    return True
+
+
+def test_the_full_plan_carries_the_explicit_3d_engine_on_every_scene_it_takes_and_says_why_not_elsewhere():
+    """A series of the explicit 3D reference over meshes, carried like every other, on each scene
+    of the full plan the engine takes; where it has none, the scene says why in one line (its
+    first run past the budget or the machine); never in the quick plan (its 10 minutes)."""
+    plan = full()
+    explicit = {study.case: s for study in plan for s in study.series if s.solver == REF3D_EXPLICIT}
+    left_out = {study.case: dict(study.left_out) for study in plan}
+    assert set(explicit) >= {"dome", "thick_cylinder", "notched_cylinder", "notched_strip", "rod_impact",
+                             "ring_in_ring", "layered_cylinder", "layered_cylinder_pulse", "moving_load",
+                             "moving_load_notched"}
+    for study in plan:
+        said = left_out[study.case].get(REF3D_EXPLICIT) or left_out[study.case].get(REF3D)
+        if study.case in explicit:
+            s = explicit[study.case]
+            assert _explicit_takes(study.case) and not said, study.case
+            assert s.levels == EXPLICIT_3D and s.until == FULL_UNTIL
+            # the notched scenes' element is B-bar, as their truths' and the implicit 3D notched cylinder's
+            assert dict(s.options) == ({"bbar": True} if "notched" in study.case else {}), study.case
+        else:  # a scene the engine takes (nothing in the full plan is refused) but too dear here: one line why
+            assert said and "\n" not in said and len(said) < 200, study.case
+    assert set(explicit) | {c for c, why in left_out.items() if why} == {study.case for study in plan}
+    assert not any(s.solver == REF3D_EXPLICIT for study in quick() for s in study.series)

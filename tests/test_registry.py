@@ -19,8 +19,8 @@ from reports.build import build
 from smfem.studies.plan import MODAL_TRUTH, REF2D, SMFEM, CaseStudy, Series, TruthPlan
 import smfem.runs.figures
 from smfem.runs import registry
-from smfem.runs.registry import (CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, CONTACT, PLASTICITY, REF3D, REFERENCE,
-                                 SMFEM_QUAD9, Solver, lookup, solvers)
+from smfem.runs.registry import (CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, CONTACT, EXPLICIT, PLASTICITY, REF3D,
+                                 REF3D_EXPLICIT, REFERENCE, SMFEM_QUAD9, Solver, lookup, solvers)
 
 COARSE = "reference-coarse"
 
@@ -97,10 +97,11 @@ def test_the_table_keeps_the_reports_styles_labels_and_choices():
     """Today's figures: the four solvers of a study drawn as before the table."""
     drawn = {s.name: (s.color, s.marker, s.label) for s in solvers() if s.series}
     assert drawn == {SMFEM: ("C0", "o", "SMFEM"), SMFEM_QUAD9: ("C3", "*", "SMFEM quad9"), REF2D: ("C1", "s", "reference FEM 2D"),
-                     REF3D: ("C2", "^", "reference FEM 3D"), CALCULIX: ("C4", "D", "CalculiX"),
-                     CALCULIX_EXPLICIT: ("C4", ">", "CalculiX explicit"), CALCULIX_MODAL: ("C4", "d", "CalculiX modal")}
+                     REF3D: ("C2", "^", "reference FEM 3D"), REF3D_EXPLICIT: ("C2", "<", "reference FEM 3D, explicit"),
+                     CALCULIX: ("C4", "D", "CalculiX"), CALCULIX_EXPLICIT: ("C4", ">", "CalculiX explicit"),
+                     CALCULIX_MODAL: ("C4", "d", "CalculiX modal")}
     assert [s.name for s in solvers() if s.command_line] == [SMFEM, REFERENCE, CALCULIX, "reference-explicit"]
-    assert {s.name: s.dim for s in solvers() if s.dim} == {REF2D: 2, REF3D: 3}
+    assert {s.name: s.dim for s in solvers() if s.dim} == {REF2D: 2, REF3D: 3, REF3D_EXPLICIT: 3}
 
 
 @pytest.mark.parametrize("feature,case", [(PLASTICITY, ("dome", {"plastic": True})), (CONTACT, ("rod_impact", {}))])
@@ -138,7 +139,35 @@ def test_calculix_procedures_are_series_of_their_own_in_one_headline_row():
         CALCULIX: "implicit", CALCULIX_EXPLICIT: "explicit", CALCULIX_MODAL: "modal"}
     assert [registry.headline_name(s) for s in (CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, SMFEM_QUAD9, REF3D)] == [
         CALCULIX, CALCULIX, CALCULIX, SMFEM_QUAD9, REF3D]
+    assert [registry.headline_name(s) for s in (REF2D, REF3D_EXPLICIT, EXPLICIT)] == [REF2D, REF3D, EXPLICIT]
     assert registry.split_level(CALCULIX_MODAL, {"refine": 2, "modes": 50}) == ({"refine": 2}, {"modes": 50})
     gauss = {"refine": 2, "time_scheme": "gauss"}  # a case parameter, though SMFEM's alone
     assert registry.split_level("smfem", gauss) == (gauss, {})
     assert Job.make("dome", CALCULIX_MODAL, {"refine": 2}).overrides == (("refine", 2),)  # the name says the procedure
+
+
+def test_the_explicit_3d_reference_is_the_explicit_engine_at_dim_3_in_the_3d_row(monkeypatch):
+    """``reference-3d-explicit`` runs the explicit reference with ``dim`` 3 (its runs' family, and
+    the entry ``reference-explicit`` at dim 3 is named by), in the headline's 3D row where the
+    cells name the engine; its step is its own Courant limit, so its ladder predicts one more
+    power of the mesh; it refuses what the engine cannot take in one line, before any work."""
+    import reference_fem.explicit
+
+    entry = lookup(REF3D_EXPLICIT)
+    assert (entry.family, entry.fixed, entry.headline, entry.variant, lookup(REF3D).variant) == (
+        EXPLICIT, {"dim": 3}, REF3D, "explicit", "implicit")
+    assert entry.series and entry.dear and entry.courant and not lookup(REF3D).courant
+    assert entry.packages == ("reference_fem",) and entry.options() == lookup(EXPLICIT).options()
+    assert registry.named_for(EXPLICIT, get_case("rod_impact", {"dim": 3})) == REF3D_EXPLICIT
+    seen = {}
+
+    def explicit(case, **how):  # what the engine is handed
+        seen.update(dim=case.params["dim"], **how)
+        return SimpleNamespace(mesh=None)
+
+    monkeypatch.setattr(reference_fem.explicit, "solve", explicit)
+    registry.solve(REF3D_EXPLICIT, get_case("thick_cylinder"), options={"bbar": True})
+    assert seen["dim"] == 3 and seen["bbar"] is True
+    monkeypatch.undo()
+    with pytest.raises(UnsupportedCase, match="^explicit reference: contact with plasticity is not available$"):
+        registry.solve(REF3D_EXPLICIT, get_case("rod_impact", {"plastic": True, "refine": 1, "t_end": 1e-6}))

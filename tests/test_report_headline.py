@@ -1,6 +1,7 @@
 """The headline's rows (reports/tables.py): CalculiX's procedures, each a series of its own, share
-one row, at each target the cheapest procedure named in its cell; a procedure that cannot take
-the scene keeps its one line beside the row."""
+one row, at each target the cheapest procedure named in its cell, and so do the 3D reference's
+implicit and explicit engines; a procedure that cannot take the scene keeps its one line beside
+the row."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import pandas as pd
 
 from reports.analysis import CaseAnalysis, SolverSummary
 from reports.tables import headline_table
-from smfem.runs.registry import CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, REF2D, SMFEM
+from smfem.runs.registry import CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, REF2D, REF3D, REF3D_EXPLICIT, SMFEM
 from smfem.studies import metrics
 from smfem.studies.jobs import NOT_AVAILABLE, OK
 
@@ -62,3 +63,47 @@ def test_a_row_of_refused_procedures_says_the_first_reason_and_lists_the_others(
     assert row.cpu_s_to_1pct == "not available: a rigid wall"
     assert contact.left_out() == ["CalculiX explicit: calculix (explicit): contact",
                                   "CalculiX modal: calculix (modal): contact"]
+
+
+def test_the_3d_row_is_the_cheaper_engine_at_each_target_named_in_its_cell_and_the_verdict():
+    """The 3D reference's implicit and explicit engines, each a series of its own, are one row: at
+    each target the cheaper engine that reaches it (else the closest), named in the cost cell,
+    in the speed-up's verdict sentence and in the summary table's "3D FEM" cell; each engine's
+    runs stay its own in the row's points."""
+    from reports.verdict import names_an_engine, sentence, summary_table
+
+    analysis = _analysis("thick_cylinder", _series(SMFEM, ("r1", 0.5, 0.03), ("r2", 2.0, 0.008)),
+                         _series(REF3D, ("r1", 4.0, 0.04), ("r2", 44.0, 0.011), ("r3", 100.0, 0.009)),
+                         _series(REF3D_EXPLICIT, ("r1", 3.0, 0.02), ("r2", 14.0, 0.012), ("r3", 60.0, 0.0095)))
+    head = headline_table([analysis])
+    row = head.set_index("solver").loc[REF3D]
+    assert list(head.solver) == [SMFEM, REF3D]
+    assert (row.cpu_s_to_1pct, row.cpu_s_to_5pct) == ("60 (explicit r3)", "3 (explicit r1)")
+    assert (row.smfem_speedup_1pct, row.smfem_speedup_5pct, row.runs) == ("30x", "6x", 6)
+    assert sentence("thick_cylinder", head.set_index("solver")).endswith(
+        ": 30 times faster than the 3D reference (explicit).")
+    assert summary_table(head)[2] == "| thick_cylinder | 1 % | 2 | - | 30 (explicit) |"
+    from smfem.cli.study import headline_lines
+
+    assert headline_lines(head)[0].endswith("; speed-up over reference-3d 30x (explicit)")
+    # the implicit engine cheaper at 1 %, neither engine within 0.5 %: the closest named
+    implicit = _analysis("dome", _series(SMFEM, ("r1", 0.5, 0.03), ("r2", 2.0, 0.008)),
+                         _series(REF3D, ("r2", 40.0, 0.009)), _series(REF3D_EXPLICIT, ("r2", 300.0, 0.0095)))
+    cells = headline_table([implicit]).set_index("solver").loc[REF3D]
+    assert cells.cpu_s_to_1pct == "40 (implicit r2)" and cells.smfem_speedup_1pct == "20x"
+    assert summary_table(headline_table([implicit]))[2] == "| dome | 1 % | 2 | - | 20 (implicit) |"
+    assert names_an_engine(head, REF3D) and not names_an_engine(head, SMFEM)
+    # a table written before the explicit engine (no engine in its cells) reads as it did
+    old = head.assign(cpu_s_to_1pct="98.6 (r3 dt2.5e-06)", cpu_s_to_5pct="4.49 (r1 dt1e-05)")
+    assert summary_table(old)[2].endswith("| 30 |") and not names_an_engine(old, REF3D)
+
+
+def test_an_engine_that_cannot_take_a_scene_keeps_its_line_beside_the_3d_row():
+    refused = SolverSummary(REF3D_EXPLICIT, NOT_AVAILABLE, "explicit reference: a wall with friction is not available "
+                            "(frictionless only)", pd.DataFrame(), [],
+                            {t: metrics.cost_to(t, [], [], []) for t in metrics.TARGETS})
+    wall = _analysis("rod", _series(SMFEM, ("r1", 1.0, 0.005)), _series(REF3D, ("r1", 20.0, 0.006)), refused)
+    row = headline_table([wall]).set_index("solver").loc[REF3D]
+    assert row.cpu_s_to_1pct == "20 (implicit r1)"
+    assert wall.left_out() == ["reference FEM 3D, explicit: explicit reference: a wall with friction is not "
+                               "available (frictionless only)"]

@@ -114,8 +114,9 @@ def command(args) -> int:
 
 def headline_lines(head) -> list[str]:
     """The headline in a few short lines (the whole table is tables/headline.csv): per case and
-    target, SMFEM's cost with its cheaper element there and its speed-up over each other solver."""
-    from reports.verdict import cheapest, split_smfem
+    target, SMFEM's cost with its cheaper element there and its speed-up over each other solver
+    (over the 3D reference: its cheaper engine there, named)."""
+    from reports.verdict import cheapest, engine, split_smfem
 
     lines = []
     width = max((len(c) for c in head.case), default=0)
@@ -133,7 +134,8 @@ def headline_lines(head) -> list[str]:
             for solver, row in others_rows.iterrows():
                 speedup = row.get(f"smfem_speedup_{column.removeprefix('cpu_s_to_')}")
                 if isinstance(speedup, str) and speedup:
-                    others.append(f"{solver} {speedup}")
+                    which = engine(solver, row[column])
+                    others.append(f"{solver} {speedup}" + (f" ({which})" if which else ""))
                 elif str(row[column]).startswith("not available"):
                     others.append(f"{solver} not available")
             lines.append(f"{case:<{width}}  {target:>4}: {best} {cost}" + (f"; speed-up over {', '.join(others)}" if others else ""))

@@ -9,9 +9,11 @@ The names are the ones the studies and ``summary.json`` use: ``smfem``, ``refere
 case's own ``dim``), ``reference-modal`` (the reference's harmonic model, exact in time) and
 ``calculix`` (CalculiX on the reference mesh, at the case's ``dim``; needs ``ccx`` on PATH;
 its implicit procedure unless told otherwise), ``calculix-explicit`` and ``calculix-modal``
-(CalculiX with its procedure fixed: a study's series each, one row of the headline) and
+(CalculiX with its procedure fixed: a study's series each, one row of the headline),
 ``reference-explicit`` (the reference's mesh and element, central differences on a lumped
-mass at the case's ``dim``: the truth engine of plastic and contact scenes).
+mass at the case's ``dim``: the truth engine of plastic and contact scenes) and
+``reference-3d-explicit`` (that engine with ``dim`` 3: a study's series, in the headline's
+``reference-3d`` row, whose cells name the cheaper of the 3D reference's two engines).
 Each solver is imported only when it runs, so ``smfem run`` does not load the reference.
 """
 
@@ -28,6 +30,8 @@ SMFEM, REFERENCE, REF2D, REF3D, MODAL = "smfem", "reference", "reference-2d", "r
 CALCULIX, EXPLICIT = "calculix", "reference-explicit"
 #: CalculiX with its ``procedure`` fixed (:attr:`Solver.options_fixed`): a study's series of their own
 CALCULIX_EXPLICIT, CALCULIX_MODAL = "calculix-explicit", "calculix-modal"
+#: the explicit reference in 3D: a study's series of its own, one headline row with ``reference-3d``
+REF3D_EXPLICIT = "reference-3d-explicit"
 #: SMFEM with the 9-node section element (:mod:`smfem.quad9`): a study's series of its own
 SMFEM_QUAD9 = "smfem-quad9"
 
@@ -61,8 +65,12 @@ class Solver:
     options_fixed : solver options the name fixes, ``(key, value)`` pairs (CalculiX's
         ``procedure``): a series of its own in a study, and one row with its family's in the
         report's headline (:func:`headline_name`), where a cell names its :attr:`variant`
-    variant : the word that tells it from its family's other entries in a cell they share
+    variant : the word that tells it from the other entries in a headline row they share
         (default: the values of :attr:`options_fixed`)
+    headline : the row of the report's headline its series count in, at each target the
+        cheapest of the row's series (default: its family's for an entry that fixes only solver
+        options, CalculiX's procedures; its own name otherwise). The explicit 3D reference
+        counts in ``reference-3d``'s
     packages : the packages whose sources decide its results besides ``cases`` and ``runs``
         (a change to them reruns its cached runs, :func:`smfem.studies.cache.code_version`)
     supports : of :data:`EVERYTHING`. :func:`solve` refuses ``forces`` where it is missing (the
@@ -74,6 +82,9 @@ class Solver:
         error estimate halves it)
     estimated : a run's error estimate is made from its companions (:mod:`smfem.runs.estimate`): a
         time-stepping solver on a mesh that ``refine`` and ``coarsen`` set
+    courant : its time step is its own Courant limit, which shrinks with the mesh's elements
+        (explicit dynamics): a run's work grows by one more power of ``refine`` than its
+        unknowns' (:func:`smfem.studies.ladder.work`)
     command_line : offered by ``smfem run --solver``
     series : a study may run a series of it (not: the truth engines, and ``reference``,
         whose ``dim`` a study fixes by name)
@@ -98,6 +109,7 @@ class Solver:
     fixes: tuple = ()
     options_fixed: tuple = ()
     variant: str = ""
+    headline: str = ""
     packages: tuple[str, ...] = ("reference_fem",)
     supports: frozenset = EVERYTHING
     label: str = ""
@@ -106,6 +118,7 @@ class Solver:
     prose: str = ""
     harmonics: bool = False
     estimated: bool = False
+    courant: bool = False
     command_line: bool = True
     series: bool = True
     dear: bool = False
@@ -123,6 +136,8 @@ class Solver:
         object.__setattr__(self, "label", self.label or self.name)
         object.__setattr__(self, "prose", self.prose or self.label)
         object.__setattr__(self, "variant", self.variant or " ".join(str(v) for _, v in self.options_fixed))
+        shares = self.options_fixed and not self.fixed  # one solver's procedures: its family's row
+        object.__setattr__(self, "headline", self.headline or (self.family if shares else self.name))
 
     @property
     def fixed(self) -> dict:
@@ -204,11 +219,11 @@ def split_level(solver: str | Solver, level: dict) -> tuple[dict, dict]:
 
 
 def headline_name(solver: str) -> str:
-    """The row of the report's headline a solver's series counts in: its family's for an entry
-    that fixes only solver options (CalculiX's procedures: one competitor, at its cheapest), its
-    own otherwise (SMFEM's elements, the 2D and 3D reference: rows of their own)."""
-    entry = lookup(solver)
-    return entry.family if entry.options_fixed and not entry.fixed else entry.name
+    """The row of the report's headline a solver's series counts in (:attr:`Solver.headline`):
+    CalculiX's procedures one row, the 3D reference's implicit and explicit engines one row
+    (one competitor each, at its cheapest), SMFEM's elements and the 2D reference rows of their
+    own."""
+    return lookup(solver).headline
 
 
 def checks(solver: str | Solver) -> dict:
@@ -366,7 +381,14 @@ register(Solver(REFERENCE, **_ON_A_MESH, label="reference FEM", color="C1", mark
 register(Solver(REF2D, **_ON_A_MESH, dim=2, label="reference FEM 2D", color="C1", marker="s",
                 prose="the 2D reference", command_line=False))
 register(Solver(REF3D, **_ON_A_MESH, dim=3, label="reference FEM 3D", color="C2", marker="^",
-                prose="the 3D reference", command_line=False, dear=True))
+                prose="the 3D reference", command_line=False, dear=True, variant="implicit"))
+# its explicit engine (central differences, lumped mass, its own Courant step), a series of its own
+# in the 3D row; what it cannot take (a wall with plasticity or friction) it refuses itself
+_CENTRAL = dict(run=_explicit, family=EXPLICIT, supports=EVERYTHING - {FORCES}, courant=True,
+                options=partial(dict, _EXPLICIT_OPTIONS), make_options=partial(checked, specs=_EXPLICIT_OPTIONS))
+register(Solver(REF3D_EXPLICIT, **_CENTRAL, dim=3, headline=REF3D, variant="explicit",
+                label="reference FEM 3D, explicit", color="C2", marker="<", prose="the 3D reference's explicit engine",
+                command_line=False, dear=True))
 register(Solver(MODAL, _modal, supports=frozenset(), label="reference FEM, harmonic model", color="C5", marker="v",
                 harmonics=True, command_line=False, series=False))
 _CCX = dict(run=_calculix, family=CALCULIX, color="C4", dear=True, options=partial(dict, _CALCULIX_OPTIONS),
@@ -376,9 +398,7 @@ register(Solver(CALCULIX, **_CCX, supports=frozenset((PLASTICITY, FORCES)), labe
 # its other procedures, series of their own; what each cannot take it refuses itself (modal: plasticity)
 register(Solver(CALCULIX_EXPLICIT, **_CCX, options_fixed=(("procedure", "explicit"),),
                 supports=frozenset((PLASTICITY, FORCES)), label="CalculiX explicit", marker=">",
-                prose="CalculiX's explicit procedure", command_line=False))
+                prose="CalculiX's explicit procedure", command_line=False, courant=True))
 register(Solver(CALCULIX_MODAL, **_CCX, options_fixed=(("procedure", "modal"),), supports=frozenset((FORCES,)),
                 label="CalculiX modal", marker="d", prose="CalculiX's modal procedure", command_line=False))
-register(Solver(EXPLICIT, _explicit, supports=EVERYTHING - {FORCES}, label="reference FEM, explicit", color="C6",
-                marker="P", series=False, options=partial(dict, _EXPLICIT_OPTIONS),
-                make_options=partial(checked, specs=_EXPLICIT_OPTIONS)))
+register(Solver(EXPLICIT, **_CENTRAL, label="reference FEM, explicit", color="C6", marker="P", series=False))

@@ -103,4 +103,5 @@ def _group(job: Job) -> tuple:
 
 
 def _work(job: Job) -> float:
-    return work(job.resolved.params, lookup(job.solver).harmonics)
+    entry = lookup(job.solver)
+    return work(job.resolved.params, entry.harmonics, entry.courant)

@@ -41,14 +41,16 @@ def size(params: dict, per_harmonic: bool) -> float:
     return cells * (max(params.get("harmonics", 1), 1) if per_harmonic else 1)
 
 
-def work(params: dict, per_harmonic: bool) -> float:
+def work(params: dict, per_harmonic: bool, courant: bool = False) -> float:
     """What a run's CPU time grows with, in the case's parameters: its :func:`size` times the
     steps, ``t_end / dt``, and the square of a modal run's ``modes`` (ccx's eigen-solve grows
-    about so: benchmarks/README.md; a solver option, passed in ``params`` beside the case's).
+    about so: benchmarks/README.md; a solver option, passed in ``params`` beside the case's);
+    ``courant``: the solver steps at its own Courant limit (:attr:`smfem.runs.registry.Solver.courant`),
+    whose steps grow as ``refine`` over ``coarsen`` (``dt`` is its output interval only).
     An estimate for predicting a ladder's next run from its last (direct solvers grow faster
-    than this with a 3-D mesh, a plastic run with its iterations, an explicit one with its
-    Courant increment)."""
-    return size(params, per_harmonic) * params.get("modes", 1) ** 2 * params["t_end"] / params["dt"]
+    than this with a 3-D mesh, a plastic run with its iterations)."""
+    steps = params["t_end"] / params["dt"] * (params.get("refine", 1) / params.get("coarsen", 1) if courant else 1)
+    return size(params, per_harmonic) * params.get("modes", 1) ** 2 * steps
 
 
 @dataclass
@@ -69,11 +71,11 @@ class Ladder:
         """The ladder of ``series``: its levels in the order of their predicted work
         (:func:`work`; the plan's order among equals). ``job(solver, level, options)``: the
         study's job of a level (:func:`smfem.studies.study.job_of`)."""
-        per_harmonic = lookup(series.solver).harmonics
+        entry = lookup(series.solver)
         split = [split_level(series.solver, level) for level in series.levels]
         params = [with_fixed(series.solver, get_case(name, {**base, **overrides})).params | own
                   for overrides, own in split]
-        order = sorted(range(len(params)), key=lambda i: work(params[i], per_harmonic))
+        order = sorted(range(len(params)), key=lambda i: work(params[i], entry.harmonics, entry.courant))
         return cls(series, get_case(name, base), truth,
                    [job(series.solver, series.levels[i], series.options) for i in order], [params[i] for i in order])
 
@@ -99,8 +101,9 @@ class Ladder:
         if self.asked == len(self.jobs):
             self.outcome = f"ladder ended at {run.label} ({_percent(error)}): not reached"
             return []
-        per_harmonic = lookup(self.series.solver).harmonics
-        predicted = cpu * work(self.params[i + 1], per_harmonic) / work(self.params[i], per_harmonic)
+        entry = lookup(self.series.solver)
+        predicted = (cpu * work(self.params[i + 1], entry.harmonics, entry.courant)
+                     / work(self.params[i], entry.harmonics, entry.courant))
         if predicted > until.budget_s:
             label = self.jobs[i + 1].describe()
             self.outcome = (f"stopped at {run.label} ({_percent(error)}): the next level ({label}) would take about "
