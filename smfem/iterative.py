@@ -34,7 +34,7 @@ from cases import x3_points
 from . import laws
 from .coupling import StackedOperator
 from .linalg import BlockFactors, step_blocks
-from .newmark import Constants, Load, MassSolve, StepFailed
+from .newmark import Constants, Load, StepFailed, acceleration_at_rest
 from .options import SolverOptions
 from .sampling import SamplePoints
 
@@ -224,7 +224,8 @@ class BlockIterative:
         if u0.any():
             self.state.law.sigma = self.points.stress(u0).reshape(6, -1)
         force = self.load(0.0) - self.op.K(u0)
-        return MassSolve(self.model.mass_matrix() if self.model.coupling else self.op.M_h)(force)
+        mass = self.model.mass_matrix if self.model.coupling else lambda: self.op.M_h
+        return acceleration_at_rest(mass, force)
 
     def commit(self, u: np.ndarray) -> None:
         self.loads_before = self.loads
