@@ -33,7 +33,7 @@ from cases import x3_points
 
 from . import laws
 from .coupling import StackedOperator
-from .linalg import BlockFactors, step_blocks
+from .linalg import BlockFactors, block_diagonal, step_blocks
 from .newmark import Constants, Load, StepFailed, acceleration_at_rest
 from .options import SolverOptions
 from .sampling import SamplePoints
@@ -99,7 +99,7 @@ class BlockSOR:
         S, o = model.systems, model.offsets
         self.omega, self.offsets = omega, o
         self.lus = BlockFactors(step_blocks(((s.K, s.M) for s in S), a0)).factors
-        K = sp.block_diag([s.K for s in S], format="csr") + (model.coupled_stiffness() if model.coupling else 0)
+        K = block_diagonal([s.K for s in S]) + (model.coupled_stiffness() if model.coupling else 0)
         M = model.mass_matrix()
         M = sp.csr_matrix(sp.diags(M) if isinstance(M, np.ndarray) else M)
         self.rows = [(sp.csr_matrix(K[o[i]:o[i + 1]]), sp.csr_matrix(a0 * M[o[i]:o[i + 1]])) for i in range(len(S))]

@@ -2,26 +2,17 @@
 the mode assembled by itself, on every kind of map and element; and a run's histories do not
 change with the way its blocks are made."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
 from cases import get_case
 from cases import verification_axis as va
-from cases.geometry import RING, Cutout
+from cases.geometry import RING
 from cases.msh_section import read_msh
 from smfem import mode_blocks
 from smfem.model import Model
 from smfem.solver import solve
-
-
-def turned_cylinder():
-    """The notched cylinder with its cut-out turned: both ring families, coupled across them."""
-    case = get_case("notched_cylinder", {"harmonics": 12, "refine": 1})
-    c = case.cutouts[0]
-    turned = tuple((a + 0.5, b + 0.5) for a, b in c.x3_intervals)
-    return dataclasses.replace(case, cutouts=(Cutout(c.s_range, c.t_range, turned),))
+from helpers import turned_cutouts
 
 
 def axis_scene(tmp_path):
@@ -33,7 +24,8 @@ def axis_scene(tmp_path):
 SCENES = {
     "prism, quad9, cut-out": (
         lambda _: get_case("moving_load_notched", {"element": "quad9", "harmonics": 8}), False, 1),
-    "ring, both families, B-bar": (lambda _: turned_cylinder(), True, 3),
+    "ring, both families, B-bar": (
+        lambda _: turned_cutouts(get_case("notched_cylinder", {"harmonics": 12, "refine": 1}), 0.5), True, 3),
     "ring, the axis": (axis_scene, False, 3),
     "ring, two materials, quad9": (
         lambda _: get_case("ring_in_ring", {"harmonics": 10, "element": "quad9"}), False, 2),
