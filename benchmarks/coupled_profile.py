@@ -148,6 +148,9 @@ def profile(name: str, sets: dict) -> dict:
     if batched:  # a batched march builds its systems batch by batch, inside it
         row["system set-up"], row["march"] = 0.0, batched - row["model"]
     row["woodbury"] -= cumulative_from(stats, PARTS[3][1], ("smfem/woodbury.py", "solve")) * cpu / whole
+    # forces_at calls forces where many points yield: that time once
+    row["projection"] -= cumulative_from(stats, (("smfem/sampling.py", "forces"),),
+                                         ("smfem/sampling.py", "forces_at")) * cpu / whole
     iterations = int(np.sum(profiled.iterations)) if getattr(profiled, "iterations", None) is not None else 0
     iterations = iterations or int(round(plain.info["iterations_mean"] * (len(plain.t) - 1))) or (len(plain.t) - 1)
     row["iterations"] = iterations

@@ -261,11 +261,9 @@ class BlockIterative:
             t2 = tick()
             sigma, law_state = self.law.stress(trial, state.law)
             t3 = tick()
-            relaxed, loads, at = state.relaxed, self.loads, law_state.yielding
+            loads, at = self.loads, law_state.yielding
             if len(at):
-                change = trial[:, at] - sigma[:, at]  # = f D d_eps_p
-                relaxed = relaxed.copy()
-                relaxed[:, at] += change
+                change = np.take(trial, at, axis=1) - np.take(sigma, at, axis=1)  # = f D d_eps_p
                 # the forces are linear in the relaxed stress: the committed ones plus those of
                 # the step's change, which is at the yielding points only
                 loads = self.loads + pts.forces_at(change, at)
@@ -283,6 +281,10 @@ class BlockIterative:
             # to confirm it (every elastic step: the thick cylinder's first 35 of 100)
             exact = self.iteration.exact and iteration == 1 and np.array_equal(loads, start)
             if exact or change2 <= self.tol**2 * max(size2, 1e-300):
+                relaxed = state.relaxed  # the relaxed stress the converged iteration leaves
+                if len(at):
+                    relaxed = relaxed.copy()
+                    relaxed[:, at] += change
                 self.pending = (PointState(law_state, relaxed), loads)
                 return x, iteration
         raise NotConverged(
