@@ -37,10 +37,9 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
-import scipy.sparse as sp  # noqa: E402
 
 from cases import get_case  # noqa: E402
-from smfem.linalg import factorize_spd, step_blocks  # noqa: E402
+from smfem.linalg import factorize_spd, stacked_step  # noqa: E402
 from smfem.newmark import Constants  # noqa: E402
 from smfem.solver import solve  # noqa: E402
 
@@ -117,7 +116,7 @@ def bare_solve_seconds(case, options) -> tuple[float, float]:
     model = Model(case, nonlinear=case.material.plastic, bbar=options.bbar)  # the modes the run keeps
     a0 = Constants.of(case.dt).a0
     blocks = model.homogeneous_blocks if model.coupling else [(s.K, s.M) for s in model.systems]
-    lu = factorize_spd(sp.block_diag(list(step_blocks(blocks, a0)), format="csr"))
+    lu = factorize_spd(stacked_step(blocks, a0))
     b = np.random.default_rng(0).normal(size=model.n_dof)
     solves = case.n_steps * (ITERATIONS_PER_STEP if case.material.plastic else 1)
     form, _ = coupled_solve.choose(model, solves, options.direct_max_nonzeros)
@@ -149,6 +148,9 @@ def profile(name: str, sets: dict) -> dict:
     if batched:  # a batched march builds its systems batch by batch, inside it
         row["system set-up"], row["march"] = 0.0, batched - row["model"]
     row["woodbury"] -= cumulative_from(stats, PARTS[3][1], ("smfem/woodbury.py", "solve")) * cpu / whole
+    # forces_at calls forces where many points yield: that time once
+    row["projection"] -= cumulative_from(stats, (("smfem/sampling.py", "forces"),),
+                                         ("smfem/sampling.py", "forces_at")) * cpu / whole
     iterations = int(np.sum(profiled.iterations)) if getattr(profiled, "iterations", None) is not None else 0
     iterations = iterations or int(round(plain.info["iterations_mean"] * (len(plain.t) - 1))) or (len(plain.t) - 1)
     row["iterations"] = iterations

@@ -1,4 +1,5 @@
-"""Global sparse assembly of element blocks for one mode pair, and lumped mass."""
+"""Global sparse assembly of element blocks for one mode pair, the element matrices that every
+mode pair's blocks combine, and lumped mass."""
 
 from __future__ import annotations
 
@@ -34,6 +35,38 @@ def weighted_elasticity(D: np.ndarray, integrals: np.ndarray) -> np.ndarray:
     """
     W = integrals[:, ROW_TYPE][:, :, ROW_TYPE]
     return D * W
+
+
+def element_terms(ops, D: np.ndarray) -> tuple[np.ndarray, list[tuple[int, int, int, int]]]:
+    """The element matrices every stiffness block combines: with ``B(p) = Ba + p Bb`` at the
+    element's sample points (which integrate its stiffness exactly, :mod:`smfem.elements`) and
+    the x3 integrals ``I_ab`` of the basis types' products (:func:`weighted_elasticity`), the
+    block coupling wavenumbers ``p`` (rows) and ``q`` is ``sum_n I_ab p^u q^v C_n``.
+
+    Parameters
+    ----------
+    ops : the element's operators on ``ne`` elements (:class:`smfem.elements.Operators`)
+    D : (6, 6) or (ne, 6, 6) elasticity matrix
+
+    Returns
+    -------
+    ``C`` (ne, n_terms, d, d) and each term's ``(a, b, u, v)``; the pairs of basis types whose
+    part of ``D`` is zero are left out.
+    """
+    Ba, Bb = ops.sample_linear_parts()  # (ne, ng, 6, d)
+    C, terms = [], []
+    for a in (0, 1):
+        for b in (0, 1):
+            Dab = D * np.outer(ROW_TYPE == a, ROW_TYPE == b)
+            if not Dab.any():
+                continue
+            per_element = "e" * (Dab.ndim - 2)
+            for u, v in ((0, 0), (1, 0), (0, 1), (1, 1)):
+                left, right = (Ba, Bb)[u], (Ba, Bb)[v]
+                C.append(np.einsum(f"eg,egri,{per_element}rs,egsj->eij", ops.sample_weights, left, Dab, right,
+                                   optimize=True))
+                terms.append((a, b, u, v))
+    return np.stack(C, axis=1), terms
 
 
 def assemble(blocks: np.ndarray, elements: np.ndarray, n_nodes: int) -> sp.csr_matrix:

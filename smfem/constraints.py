@@ -25,6 +25,19 @@ def fixed_dofs(case, mesh: SectionMesh) -> np.ndarray:
     return np.unique(np.concatenate(fixed)) if fixed else np.array([], int)
 
 
+def mode_maps(case, mesh: SectionMesh, modes: list[Mode], fixed: np.ndarray) -> list[sp.csr_matrix]:
+    """The map of each of ``modes`` (:func:`mode_map`); modes with the same absent components and
+    regularity on the axis share one."""
+    def read(mode):  # what mode_map reads of a mode
+        return absent_components(mode), min(mode.l, 2) if case.body == RING else 0
+
+    maps = {}
+    for mode in modes:
+        if read(mode) not in maps:
+            maps[read(mode)] = mode_map(case, mesh, mode, fixed)
+    return [maps[read(mode)] for mode in modes]
+
+
 def mode_map(case, mesh: SectionMesh, mode: Mode, fixed: np.ndarray) -> sp.csr_matrix:
     """The map ``T`` (n_full, n_free) of one mode."""
     n_full = 3 * mesh.n_nodes

@@ -31,7 +31,7 @@ import scipy.sparse.linalg as sla
 
 from . import woodbury
 from .coupling import StackedOperator
-from .linalg import BlockFactors, available_bytes, factorize_spd, step_blocks
+from .linalg import BlockFactors, available_bytes, factorize_spd, stacked_step, step_blocks
 
 #: the share of the memory available at the start that a factorization may take
 MEMORY_SHARE = 0.6
@@ -43,7 +43,7 @@ class BlockDiagonal:
     name = "block-diagonal"
 
     def __init__(self, model, a0: float):
-        self.lu = factorize_spd(sp.block_diag(list(step_blocks(((s.K, s.M) for s in model.systems), a0)), format="csr"))
+        self.lu = factorize_spd(stacked_step(((s.K, s.M) for s in model.systems), a0))
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         return self.lu.solve(b)
@@ -55,7 +55,7 @@ class Whole:
     name = "whole"
 
     def __init__(self, model, a0: float):
-        blocks = sp.block_diag(list(step_blocks(((s.K, s.M) for s in model.systems), a0)), format="csr")
+        blocks = stacked_step(((s.K, s.M) for s in model.systems), a0)
         self.lu = factorize_spd(blocks + model.coupled_stiffness() + a0 * model.coupled_mass)
 
     def solve(self, b: np.ndarray) -> np.ndarray:

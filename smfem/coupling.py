@@ -14,9 +14,9 @@ solve with that matrix. Exact, so equal to the assembled coupled matrices to rou
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from .elements import DOFS_PER_NODE
+from .linalg import block_diagonal
 from .sampling import DofSeries, carried_dofs, section_maps
 
 
@@ -35,9 +35,9 @@ class StackedOperator:
         self.model = model
         S = model.systems
         if not model.coupling:
-            self.K_h, self.M_h, self.series = sp.block_diag([s.K for s in S], format="csr"), np.concatenate([s.M for s in S]), None
+            self.K_h, self.M_h, self.series = block_diagonal([s.K for s in S]), np.concatenate([s.M for s in S]), None
             return
-        self.K_h = sp.block_diag([k for k, _ in model.homogeneous_blocks], format="csr")
+        self.K_h = block_diagonal([k for k, _ in model.homogeneous_blocks])
         self.M_h = np.concatenate([m for _, m in model.homogeneous_blocks])
         live = model.cutout_elements
         x3, w, excess = cutout_points(model)

@@ -33,8 +33,8 @@ from cases import x3_points
 
 from . import laws
 from .coupling import StackedOperator
-from .linalg import BlockFactors, step_blocks
-from .newmark import Constants, Load, MassSolve, StepFailed
+from .linalg import BlockFactors, block_diagonal, step_blocks
+from .newmark import Constants, Load, StepFailed, acceleration_at_rest
 from .options import SolverOptions
 from .sampling import SamplePoints
 
@@ -99,7 +99,7 @@ class BlockSOR:
         S, o = model.systems, model.offsets
         self.omega, self.offsets = omega, o
         self.lus = BlockFactors(step_blocks(((s.K, s.M) for s in S), a0)).factors
-        K = sp.block_diag([s.K for s in S], format="csr") + (model.coupled_stiffness() if model.coupling else 0)
+        K = block_diagonal([s.K for s in S]) + (model.coupled_stiffness() if model.coupling else 0)
         M = model.mass_matrix()
         M = sp.csr_matrix(sp.diags(M) if isinstance(M, np.ndarray) else M)
         self.rows = [(sp.csr_matrix(K[o[i]:o[i + 1]]), sp.csr_matrix(a0 * M[o[i]:o[i + 1]])) for i in range(len(S))]
@@ -224,7 +224,8 @@ class BlockIterative:
         if u0.any():
             self.state.law.sigma = self.points.stress(u0).reshape(6, -1)
         force = self.load(0.0) - self.op.K(u0)
-        return MassSolve(self.model.mass_matrix() if self.model.coupling else self.op.M_h)(force)
+        mass = self.model.mass_matrix if self.model.coupling else lambda: self.op.M_h
+        return acceleration_at_rest(mass, force)
 
     def commit(self, u: np.ndarray) -> None:
         self.loads_before = self.loads
@@ -260,11 +261,9 @@ class BlockIterative:
             t2 = tick()
             sigma, law_state = self.law.stress(trial, state.law)
             t3 = tick()
-            relaxed, loads, at = state.relaxed, self.loads, law_state.yielding
+            loads, at = self.loads, law_state.yielding
             if len(at):
-                change = trial[:, at] - sigma[:, at]  # = f D d_eps_p
-                relaxed = relaxed.copy()
-                relaxed[:, at] += change
+                change = np.take(trial, at, axis=1) - np.take(sigma, at, axis=1)  # = f D d_eps_p
                 # the forces are linear in the relaxed stress: the committed ones plus those of
                 # the step's change, which is at the yielding points only
                 loads = self.loads + pts.forces_at(change, at)
@@ -282,6 +281,10 @@ class BlockIterative:
             # to confirm it (every elastic step: the thick cylinder's first 35 of 100)
             exact = self.iteration.exact and iteration == 1 and np.array_equal(loads, start)
             if exact or change2 <= self.tol**2 * max(size2, 1e-300):
+                relaxed = state.relaxed  # the relaxed stress the converged iteration leaves
+                if len(at):
+                    relaxed = relaxed.copy()
+                    relaxed[:, at] += change
                 self.pending = (PointState(law_state, relaxed), loads)
                 return x, iteration
         raise NotConverged(

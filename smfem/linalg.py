@@ -80,6 +80,26 @@ def step_blocks(pairs, a0: float):
     return (K + sp.diags(a0 * M) for K, M in pairs)
 
 
+def stacked_step(pairs, a0: float) -> sp.csr_matrix:
+    """``K + a0 M`` of every mode's (stiffness, lumped mass diagonal) in ``pairs``, on the
+    diagonal of one matrix."""
+    stiffness, mass = zip(*pairs)
+    return block_diagonal(stiffness) + sp.diags(a0 * np.concatenate(mass))
+
+
+def block_diagonal(blocks) -> sp.csr_matrix:
+    """The CSR matrix with ``blocks`` (sparse, any shape) on its diagonal, their index arrays
+    shifted and joined: scipy's ``block_diag`` converts each block to COO and back, which
+    costs more than the joining where there are hundreds of small blocks (one per harmonic)."""
+    blocks = [sp.csr_matrix(b) for b in blocks]
+    rows, cols = (np.cumsum([0] + [b.shape[axis] for b in blocks]) for axis in (0, 1))
+    stored = np.cumsum([0] + [b.nnz for b in blocks])
+    indptr = np.concatenate([[0]] + [b.indptr[1:] + n for b, n in zip(blocks, stored)])
+    indices = np.concatenate([b.indices + c for b, c in zip(blocks, cols)])
+    data = np.concatenate([b.data for b in blocks])
+    return sp.csr_matrix((data, indices, indptr), shape=(rows[-1], cols[-1]))
+
+
 class BlockFactors:
     """Factors of a block-diagonal matrix, one per diagonal block, ``solve(b)`` block by block:
     a block's factorization takes its own unknowns' memory and fill only, never a copy of the

@@ -21,7 +21,8 @@ import scipy.sparse as sp
 from cases.geometry import RING
 from cases.params import UnsupportedCase
 
-from . import assembly, bbar as projected, constraints, elements, fourier, inhomogeneity, laws, loads, symmetry
+from . import (assembly, bbar as projected, constraints, elements, fourier, inhomogeneity, laws, loads,
+               mode_blocks, symmetry)
 from cases.section_mesh import SectionMesh, section_mesh
 
 
@@ -149,17 +150,18 @@ class Model:
             self._I = I
             linked = np.abs(I).reshape(len(active), len(active), -1).max(axis=2) > 0
             np.fill_diagonal(linked, False)
-            self.coupling = [tuple(map(int, p)) for p in np.argwhere(linked)]
+            self.coupling = [tuple(p) for p in np.argwhere(linked).tolist()]
         self.modes = [candidates[a] for a in active]
         fixed = constraints.fixed_dofs(case, self.mesh)
         self.systems: list[ModeSystem] = []
-        self._maps = [constraints.mode_map(case, self.mesh, mode, fixed) for mode in self.modes]
+        self._maps = constraints.mode_maps(case, self.mesh, self.modes, fixed)
+        #: each mode's :class:`smfem.mode_blocks.SharedBlocks`, or None: assembled by itself
+        self._shared = self._shared_blocks() if stiffness else [None] * len(self.modes)
         for i, (mode, T) in enumerate(zip(self.modes, self._maps)):
-            K, M = (self.reduced_stiffness(i) if stiffness else None), self.reduced_mass(i)
+            K, M = self.reduced_blocks(i) if stiffness else (None, self.reduced_mass(i))
             self.systems.append(ModeSystem(mode, T, K, M, T.T @ Q[mode], self._project(T, V[mode]),
                                            tuple(T.T @ term.shapes[mode] for term in self.timed)))
         self.offsets = np.cumsum([0] + [s.T.shape[1] for s in self.systems])
-        self.coupled_mass = self._coupled_mass()
 
     def element_D(self, elements=None, spread: int = 0) -> np.ndarray:
         """The elasticity matrix of ``elements`` (all: None), (n, 6, 6) with ``spread`` unit axes
@@ -216,10 +218,13 @@ class Model:
         M.eliminate_zeros()
         return M
 
-    def _coupled_mass(self) -> sp.csr_matrix:
+    @cached_property
+    def coupled_mass(self) -> sp.csr_matrix:
         """The off-diagonal lumped mass blocks ``rho(lm)`` of every coupled pair, as one matrix:
         a lumped mass is diagonal on the full dofs, so each block maps each cut-out node's dofs,
-        which get their share of each of their cut-out elements' ``rho(lm)`` (elsewhere it is 0)."""
+        which get their share of each of their cut-out elements' ``rho(lm)`` (elsewhere it is 0).
+        Built when first asked for (a whole factorization, the initial acceleration under a load):
+        every pair of modes has a block at each cut-out dof."""
         if not self.coupling:
             return self._assemble_pairs(None, None)
         live = self.cutout_elements
@@ -260,21 +265,10 @@ class Model:
         if not self.coupling:
             return self._assemble_pairs(None, None)
         live = self.cutout_elements
-        ops = self.ops.subset(live)
         p = np.array([fourier.wavenumber(m, self.body, self.length) for m in self.modes])
-        Ba, Bb = ops.sample_linear_parts()  # (ne, ng, 6, d)
-        weights = ops.sample_weights
-        C, terms = [], []
-        for a in (0, 1):
-            for b in (0, 1):
-                D = self.element_D(live) * np.outer(fourier.ROW_TYPE == a, fourier.ROW_TYPE == b)
-                if not D.any():
-                    continue
-                for left, right, powers in ((Ba, Ba, (0, 0)), (Bb, Ba, (1, 0)), (Ba, Bb, (0, 1)), (Bb, Bb, (1, 1))):
-                    C.append(np.einsum(f"eg,egri,{'e' * (D.ndim - 2)}rs,egsj->eij", weights, left, D, right, optimize=True))
-                    terms.append((a, b) + powers)
+        C, terms = assembly.element_terms(self.ops.subset(live), self.element_D(live))
         d = self.element.dofs
-        C = np.stack(C, axis=1).reshape(len(live), len(terms), d * d)
+        C = C.reshape(len(live), len(terms), d * d)
 
         def blocks(pairs):
             pi, pj = pairs.T
@@ -311,6 +305,33 @@ class Model:
             out[:, 0, 0], out[:, 1, 1] = fourier.psi_squared_integrals(self.modes[i], self.body, self.length)
         return out
 
+    def _shared_blocks(self) -> list:
+        """:attr:`_shared`: the modes of one constraint map (:func:`smfem.constraints.mode_maps`)
+        share its :class:`smfem.mode_blocks.SharedBlocks` where that pays
+        (:func:`smfem.mode_blocks.pays`); the others are assembled one by one."""
+        groups = {}
+        for i, T in enumerate(self._maps):
+            groups.setdefault(id(T), []).append(i)
+        profile = np.zeros(self.mesh.n_elements, int) if self._profile is None else self._profile
+        shared, terms = [None] * len(self.modes), None
+        for members in groups.values():
+            if not mode_blocks.pays(len(members), profile.max() + 1):
+                continue
+            terms = terms or mode_blocks.terms_by_power(self.ops, self.element_D())
+            node_mass = self.element_rho(spread=1) * self.ops.node_volume
+            T = self._maps[members[0]]
+            blocks = mode_blocks.SharedBlocks(terms, profile, node_mass, self.mesh.elements, T)
+            for i in members:
+                shared[i] = blocks
+        return shared
+
+    def _profile_integrals(self, i: int, homogeneous: bool = False) -> np.ndarray:
+        """(profiles, 2, 2) the x3 integrals of active mode ``i`` with itself per profile, or
+        (1, 2, 2) those of every element (``homogeneous``: with f = 1 everywhere)."""
+        if self._I is not None and not homogeneous:
+            return self._I[i, i]
+        return np.diag(fourier.psi_squared_integrals(self.modes[i], self.body, self.length))[None]
+
     def full_stiffness(self, i: int, homogeneous: bool = False) -> sp.csr_matrix:
         """Unconstrained stiffness block (3 n_nodes square) of active mode ``i`` with itself."""
         Dw = assembly.weighted_elasticity(self.D, self.integrals(i, i, homogeneous=homogeneous))
@@ -332,15 +353,18 @@ class Model:
     def reduced_blocks(self, i: int, homogeneous: bool = False) -> tuple[sp.csr_matrix, np.ndarray]:
         """Mode ``i``'s reduced stiffness and lumped mass diagonal; ``homogeneous``: of the body
         without its cut-outs (f = 1)."""
+        if self._shared[i] is not None:
+            p = fourier.wavenumber(self.modes[i], self.body, self.length)
+            return self._shared[i].blocks(p, self._profile_integrals(i, homogeneous))
         return self.reduced_stiffness(i, homogeneous), self.reduced_mass(i, homogeneous)
 
     def reduced_stiffness(self, i: int, homogeneous: bool = False) -> sp.csr_matrix:
-        """Mode ``i``'s reduced stiffness (:meth:`reduced_blocks`)."""
+        """Mode ``i``'s reduced stiffness assembled by itself (:meth:`reduced_blocks`)."""
         T = self._maps[i]
         return (T.T @ self.full_stiffness(i, homogeneous) @ T).tocsr()
 
     def reduced_mass(self, i: int, homogeneous: bool = False) -> np.ndarray:
-        """Mode ``i``'s reduced lumped mass diagonal (:meth:`reduced_blocks`)."""
+        """Mode ``i``'s reduced lumped mass diagonal by itself (:meth:`reduced_blocks`)."""
         T = self._maps[i]
         return T.multiply(T).T @ self.full_mass(i, i, homogeneous)  # T'diag(m)T: T's columns do not overlap
 
@@ -354,12 +378,13 @@ class Model:
             raise ValueError("coupled modes cannot be taken apart")
         part = copy.copy(self)
         part._maps = [self._maps[i] for i in indices]
+        part._shared = [self._shared[i] for i in indices]
         part.modes = [self.modes[i] for i in indices]
         part.systems = [self.systems[i] if self.systems[i].K is not None or not stiffness else
                         dataclasses.replace(self.systems[i], K=self.reduced_stiffness(i)) for i in indices]
         part.offsets = np.cumsum([0] + [s.T.shape[1] for s in part.systems])
-        part.coupled_mass = part._coupled_mass()
-        part.__dict__.pop("homogeneous_blocks", None)  # a cached property of all modes
+        for cached in ("homogeneous_blocks", "coupled_mass"):  # cached properties of all modes
+            part.__dict__.pop(cached, None)
         return part
 
     @property

@@ -117,6 +117,13 @@ class MassSolve:
         return out
 
 
+def acceleration_at_rest(mass, force: np.ndarray) -> np.ndarray:
+    """``M a = force`` at t = 0 (:class:`MassSolve`), ``mass()`` giving ``M`` asked for only
+    where the force is not zero: a body that starts at rest and unloaded (the moving loads) needs
+    neither a coupled mass (every pair of modes at every cut-out dof) nor its factorization."""
+    return MassSolve(mass())(force) if force.any() else np.zeros_like(force)
+
+
 class LinearSystem:
     """``M a + K u = Q`` with one factorization of ``K + a0 M`` per time-step size.
 
@@ -185,14 +192,14 @@ class CoupledLinearSystem(LinearSystem):
     """``M a + K u = Q`` of modes that couple: ``K`` and ``M`` applied by ``op``
     (:class:`smfem.coupling.StackedOperator`: exact, no coupled matrix), ``K + a0 M`` solved by
     ``solver`` (:mod:`smfem.coupled_solve`, built for this ``dt``); ``M`` also as the sparse
-    coupled mass, for the acceleration at t = 0."""
+    coupled mass (``mass()``, made when asked), for the acceleration at t = 0."""
 
-    def __init__(self, op, solver, mass: sp.spmatrix, Q: np.ndarray, dt: float, terms=()):
-        self.op, self.lu, self.M, self.load = op, solver, mass, Load(Q, terms)
+    def __init__(self, op, solver, mass, Q: np.ndarray, dt: float, terms=()):
+        self.op, self.lu, self.mass, self.load = op, solver, mass, Load(Q, terms)
         self.a0, self.factorizations = Constants.of(dt).a0, 1
 
     def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
-        return MassSolve(self.M)(self.load(0.0) - self.op.K(u0))
+        return acceleration_at_rest(self.mass, self.load(0.0) - self.op.K(u0))
 
     def solve(self, predicted: np.ndarray, u: np.ndarray, step: int, t: float) -> tuple[np.ndarray, int]:
         return self.lu.solve(self.load(t) + self.a0 * self.op.M(predicted)), 1

@@ -90,7 +90,10 @@ def return_map_rows(trial: np.ndarray, alpha: np.ndarray, mu: np.ndarray, sigma_
         return trial, alpha, at, np.zeros((6, 0))
     # per-point constants (a section of several materials) at the yielding points only
     sigma_y0, H = (v if np.ndim(v) == 0 else v[at] for v in (sigma_y0, H))
-    s, a, deps_p = _radial_return(trial[:, at], SQRT3 * np.sqrt(T2[at]), alpha[at], mu[at], sigma_y0, H)
+    # np.take gathers into rows that are each contiguous (``trial[:, at]`` does not: the return's
+    # arithmetic on them ran at half the speed)
+    yielding = np.take(trial, at, axis=1)
+    s, a, deps_p = _radial_return(yielding, SQRT3 * np.sqrt(T2[at]), alpha[at], mu[at], sigma_y0, H)
     sigma, alpha = trial.copy(), alpha.copy()
     sigma[:, at], alpha[at] = s, a
     return sigma, alpha, at, deps_p

@@ -25,15 +25,26 @@ import scipy.sparse as sp
 from . import fourier, inhomogeneity
 from .assembly import element_dofs, node_dofs
 from .elements import DOFS_PER_NODE
+from .linalg import block_diagonal
 
 
 def carried_dofs(model, nodes: np.ndarray | None = None) -> np.ndarray:
     """Full dofs of ``nodes`` (all: None) that some mode carries, sorted."""
     dofs = np.arange(DOFS_PER_NODE * model.mesh.n_nodes) if nodes is None else node_dofs(nodes).ravel()
     carried = np.zeros(DOFS_PER_NODE * model.mesh.n_nodes, bool)
-    for s in model.systems:
-        carried[s.T.nonzero()[0]] = True
+    for T in {id(s.T): s.T for s in model.systems}.values():  # modes share maps
+        carried[T.nonzero()[0]] = True
     return dofs[carried[dofs]]
+
+
+def rows_of(model, dofs: np.ndarray) -> list[sp.csr_matrix]:
+    """Each mode's map restricted to the full ``dofs``: (len(dofs), mode's amplitudes), reduced
+    amplitudes -> those dofs; modes that share a map share it."""
+    rows = {}
+    for s in model.systems:
+        if id(s.T) not in rows:
+            rows[id(s.T)] = sp.csr_matrix(s.T[dofs])
+    return [rows[id(s.T)] for s in model.systems]
 
 
 def linear_parts(ops) -> tuple[np.ndarray, np.ndarray]:
@@ -94,7 +105,7 @@ class DofSeries:
             psi = psi @ combine
         self.psi = psi.transpose(1, 0, 2).copy()  # (2, modes, nq): synthesis per basis type
         self.psi_w = (psi * weights).transpose(1, 2, 0).copy()  # (2, nq, modes): weighted projection
-        self.E = sp.block_diag([sp.csr_matrix(s.T[dofs]) for s in S], format="csr")  # stacked -> (modes, dofs)
+        self.E = block_diagonal(rows_of(model, dofs))  # stacked -> (modes, dofs)
         self.Et = self.E.T.tocsr()
 
     def coefficients(self, u: np.ndarray) -> np.ndarray:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from .linalg import block_diagonal
 from .model import Model
 
 
@@ -19,8 +20,8 @@ def stacked(model: Model):
     offsets = np.cumsum([0] + [s.K.shape[0] for s in S])
     Q, V0 = np.concatenate([s.Q for s in S]), np.concatenate([s.V0 for s in S])
     if not model.coupling:
-        return sp.block_diag([s.K for s in S], format="csr"), model.mass_matrix(), Q, V0, offsets
-    K = (sp.block_diag([s.K for s in S], format="csr") + model.coupled_stiffness()).tocsr()
+        return block_diagonal([s.K for s in S]), model.mass_matrix(), Q, V0, offsets
+    K = (block_diagonal([s.K for s in S]) + model.coupled_stiffness()).tocsr()
     return K, model.mass_matrix(), Q, V0, offsets
 
 

@@ -184,7 +184,7 @@ class CoupledElastic:
         op = StackedOperator(model)
         solver = coupled_solve.build(form, model, run.a0, LINEAR_KRYLOV_RTOL, 10 * KRYLOV_MAX, op)
         Q = np.concatenate([s.Q for s in model.systems])
-        system = CoupledLinearSystem(op, solver, model.mass_matrix(), Q, case.dt, force_terms(case, model))
+        system = CoupledLinearSystem(op, solver, model.mass_matrix, Q, case.dt, force_terms(case, model))
         return model, system, f"{cls.DESCRIPTIONS[form]} ({len(model.systems)} harmonics)"
 
 

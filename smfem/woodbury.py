@@ -26,8 +26,8 @@ import scipy.sparse as sp
 from . import fourier
 from .coupling import cutout_points
 from .elements import DOFS_PER_NODE
-from .linalg import factorize_spd, step_blocks
-from .sampling import DofSeries, carried_dofs, linear_parts, series_index
+from .linalg import factorize_spd, stacked_step
+from .sampling import DofSeries, carried_dofs, linear_parts, rows_of, series_index
 
 
 def cutout_dofs(model) -> np.ndarray:
@@ -78,12 +78,10 @@ class CutoutWoodbury:
     """``solve(b)`` with the coupled elastic ``K + a0 M`` of ``model``, as described above."""
 
     def __init__(self, model, a0: float):
-        S = model.systems
         x3, combine, excess = point_combinations(model)
         dofs = cutout_dofs(model)
-        n_dof = len(dofs)
         self.series = DofSeries(model, dofs, x3, np.ones(combine.shape[1]), combine)  # at the combinations
-        E = [sp.csr_matrix(s.T[dofs]) for s in S]  # reduced -> cut-out dofs, per mode
+        E = rows_of(model, dofs)  # reduced -> cut-out dofs, per mode
         H = self._energies(model, a0, dofs, excess)  # (combinations, 2 dofs, 2 dofs), f - 1 < 0
         # -H_q = F_q F_q' (the weights are in the combinations): the correction's factors, each
         # combination's padded to a common rank
@@ -96,44 +94,53 @@ class CutoutWoodbury:
         self.F = F[:, self.series.source]  # on the series' sorted rows
         # A_h: the body without cut-outs, block-diagonal
         blocks = model.homogeneous_blocks
-        self.base = factorize_spd(sp.block_diag(list(step_blocks(blocks, a0)), format="csr"))
+        self.base = factorize_spd(stacked_step(blocks, a0))
         # S = I - V A_h^-1 V' = I - sum_l W_l G_l W_l', G_l the cut-out dofs' block of A_l^-1
         # one solve with the block-diagonal factors and a column per cut-out dof, unit in every
         # mode's block at once (the blocks do not mix), gives every mode's block of A^-1 there
         columns, o = self.base.solve(sp.vstack([Ei.T for Ei in E]).toarray()), model.offsets
         G = np.stack([Ei @ columns[o[i]:o[i + 1]] for i, Ei in enumerate(E)])  # (modes, dofs, dofs)
-        capacitance = np.eye(F.shape[0] * F.shape[2]) - self._correction(F, G, dofs)
+        capacitance = self._capacitance(F, G, dofs)
         # S^-1 itself (its lower triangle), applied by one symmetric product a solve: it reads the
-        # triangle once where the Cholesky factor's two triangular solves read it twice and run
-        # slower (rank 5016: 7.4 against 22-26 ms a solve, for 2 s more set-up; equal to 1.5e-13)
+        # triangle once where the Cholesky factor's two triangular solves read it twice. The
+        # inverse costs twice the factor's flops, and pays from a few hundred solves on
+        # (benchmarks/README.md, coupled_profile.py); equal to 1.5e-13
         factor, _ = la.cho_factor(capacitance, lower=True, check_finite=False, overwrite_a=True)
         self.inverse, info = la.lapack.dpotri(factor, lower=1, overwrite_c=1)
         if info:
             raise la.LinAlgError(f"dpotri: the capacitance is singular ({info})")
         self.rank = len(capacitance)
 
-    def _correction(self, F: np.ndarray, G: np.ndarray, dofs: np.ndarray) -> np.ndarray:
-        """``V A_h^-1 V' = sum_l W_l G_l W_l'`` (rank, rank), summed over the modes first: with
-        ``Z_l`` the series (U and W) of unit amplitudes at the points, the kernel
-        ``K[(q, a, d), (p, b, e)] = sum_l Z_l[q, a, d] G_l[d, e] Z_l[p, b, e]`` is one matrix
-        product per cut-out dof, and ``F' K F`` one per point: ``(2 q n)^2`` modes flops and
-        ``q^2 (2 n)^2 rank``, against ``rank^2`` times the coupled amplitudes of forming each
-        mode's ``W_l G_l W_l'`` (moving_load_notched, quad9, 480 harmonics: 47 points, 66 dofs,
-        rank 6204 over 31680 amplitudes: the capacitance 25 -> 2.8 CPU s, the set-up 34 -> 7.3 s)."""
+    def _capacitance(self, F: np.ndarray, G: np.ndarray, dofs: np.ndarray) -> np.ndarray:
+        """The lower triangle of ``S = I - V A_h^-1 V'``, ``V A_h^-1 V' = sum_l W_l G_l W_l'``
+        summed over the modes first. With ``Z_l`` the series (U and W) of unit amplitudes at the
+        points, the kernel ``K[(q, a, d), (p, b, e)] = sum_l Z_l[q, a, d] G_l[d, e] Z_l[p, b, e]``,
+        and ``Z_l`` depends on the dof ``d`` only through its basis type: per pair of types, one
+        matrix product over the modes gives every pair of points and dofs, and ``F_q' K F_p``
+        one product per pair of points. Only the pairs ``p <= q`` are formed (``S`` is
+        symmetric, the Cholesky factor reads the lower triangle): ``(q (q + 1) / 2) (2 n)^2``
+        modes flops and ``q (q + 1) (2 n)^2 rank``, against ``rank^2`` times the coupled
+        amplitudes of forming each mode's ``W_l G_l W_l'``."""
         nq, two_n, rank = F.shape
-        n = two_n // 2
+        n, modes = two_n // 2, len(G)
         comp_type = (dofs % DOFS_PER_NODE == 2).astype(int)  # in-plane components go as psi1, the x3 one as psi3
         psi, k = self.series.psi, self.series.k  # (2, modes, nq), (modes,)
-        Z = np.stack([psi[comp_type], k[None, :, None] * psi[1 - comp_type]], axis=2)  # (dofs, modes, U/W, nq)
-        Z = np.ascontiguousarray(Z.transpose(1, 3, 2, 0))  # (modes, nq, U/W, dofs): F's rows per point
-        flat = Z.reshape(len(G), -1)
-        kernel = np.empty((nq, 2, n, nq * two_n))
-        for d in range(n):
-            kernel[:, :, d] = (Z[:, :, :, d].reshape(len(G), -1).T
-                               @ (G[:, d, None, None, :] * Z).reshape(flat.shape)).reshape(nq, 2, -1)
-        kernel = kernel.reshape(nq, two_n, nq, two_n)
-        right = np.einsum("qipj,pjs->qips", kernel, F, optimize=True)  # K F
-        return np.einsum("qir,qips->qrps", F, right, optimize=True).reshape(nq * rank, nq * rank)
+        Z = [np.stack([psi[t], k[:, None] * psi[1 - t]], axis=2) for t in (0, 1)]  # per type: (modes, nq, U/W)
+        q, p = np.tril_indices(nq)  # the pairs of points of the lower triangle
+        kernel = np.empty((len(q), 2, n, 2, n))  # K's blocks (q, p)
+        for t in (0, 1):
+            for u in (0, 1):
+                d, e = np.flatnonzero(comp_type == t), np.flatnonzero(comp_type == u)
+                products = (Z[t][:, q, :, None] * Z[u][:, p, None, :]).reshape(modes, -1)  # (modes, pairs 2 2)
+                summed = products.T @ G[:, d[:, None], e[None, :]].reshape(modes, -1)  # (pairs 2 2, d e)
+                kernel[:, :, d[:, None], :, e[None, :]] = (summed.reshape(len(q), 2, 2, len(d), len(e))
+                                                           .transpose(3, 4, 0, 1, 2))
+        kernel = kernel.reshape(len(q), two_n, two_n)
+        capacitance = np.zeros((nq, rank, nq, rank))
+        capacitance[q, :, p, :] = -np.matmul(np.matmul(F[q].transpose(0, 2, 1), kernel), F[p])
+        capacitance = capacitance.reshape(nq * rank, nq * rank)
+        capacitance[np.diag_indices_from(capacitance)] += 1.0
+        return capacitance
 
     @staticmethod
     def _energies(model, a0, dofs, excess):

@@ -9,7 +9,7 @@ import numpy as np
 import scipy.sparse.linalg as sla
 
 from cases import get_case
-from cases.geometry import RING, Axis, Pressure, Section, Support
+from cases.geometry import RING, Axis, Cutout, Pressure, Section, Support
 from smfem import assembly, element, elements, fourier
 from cases.section_mesh import section_mesh
 from smfem.model import Model
@@ -152,3 +152,10 @@ def clamped_plate(h: float, a: float = 10.0, n_r: int = 20, E: float = 1e7, nu: 
 def thick_cylinder_internal_pressure(p: float = 1e6, **overrides):
     case = get_case("thick_cylinder", overrides)
     return dataclasses.replace(case, loads=(Pressure(p, "inner", ((0.0, 2 * math.pi),)),))
+
+
+def turned_cutouts(case, angle: float):
+    """``case`` with its cut-outs turned by ``angle`` along x3 (a ring's: both families, coupled
+    across them)."""
+    return dataclasses.replace(case, cutouts=tuple(
+        Cutout(c.s_range, c.t_range, tuple((a + angle, b + angle) for a, b in c.x3_intervals)) for c in case.cutouts))

@@ -7,7 +7,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
 from cases import get_case
-from smfem.linalg import BandedCholesky, factorize_spd
+from smfem.linalg import BandedCholesky, block_diagonal, factorize_spd, stacked_step, step_blocks
 from smfem.model import Model
 from smfem.newmark import Constants
 
@@ -37,3 +37,16 @@ def test_a_band_wider_than_the_lu_or_an_indefinite_matrix_goes_to_lu():
         assert not isinstance(f, BandedCholesky)
         b = rng.normal(size=60)
         assert np.allclose(A @ f.solve(b), b)
+
+
+def test_block_diagonal_and_the_stacked_step_matrix_are_scipys():
+    """The joined index arrays against scipy's block_diag: blocks of any shape, an empty one,
+    a block with an empty row; and the stacked K + a0 M against the blocks' one by one."""
+    rng = np.random.default_rng(0)
+    blocks = [sp.random(3, 5, density=0.4, random_state=1), sp.csr_matrix((2, 2)),
+              sp.random(4, 1, density=0.5, random_state=2), sp.random(6, 6, density=0.3, random_state=3)]
+    assert (block_diagonal(blocks) != sp.block_diag(blocks, format="csr")).nnz == 0
+    assert block_diagonal(blocks).shape == (15, 14)
+    pairs = [(sp.random(n, n, density=0.5, random_state=n) + sp.eye(n), rng.random(n)) for n in (3, 1, 4)]
+    expected = sp.block_diag(list(step_blocks(pairs, 2.5)), format="csr")
+    assert abs(stacked_step(pairs, 2.5) - expected).max() == 0.0
