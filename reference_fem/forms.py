@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import BilinearForm, LinearForm
+from skfem import LinearForm
 from skfem.helpers import dot
 
 SQRT2 = np.sqrt(2.0)
@@ -150,13 +150,6 @@ def stiffness(basis, axisymmetric: bool, weights: np.ndarray, D: np.ndarray,
 def internal_forces(B: sp.csr_matrix, weights: np.ndarray, sigma: np.ndarray) -> np.ndarray:
     """Nodal internal forces ``B^T (w sigma)`` from Mandel stresses ``sigma``, shape ``(n_qp, nc)``."""
     return B.T @ (sigma * weights[:, None]).ravel()
-
-
-@BilinearForm
-def scalar_mass(u, v, w):
-    """``rho u v`` of scalar functions, times the radius ``w.weight`` when axisymmetric: each
-    component's block of the consistent mass ``rho u . v`` (:func:`reference_fem.mass.consistent_mass`)."""
-    return w.rho * u * v * w.weight
 
 
 @LinearForm
