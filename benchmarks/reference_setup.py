@@ -4,8 +4,8 @@ they replaced.
     python benchmarks/reference_setup.py [--runs thick_cylinder:3:2 ...] [--tiny]
 
 Per model (scene, dim, refine; B-bar on the notched scenes, as the reports run them), CPU
-seconds (one thread) of: the mass from the scalar element, one copy per component, against
-skfem's vector form ``rho u . v``; the stiffness element by element against the sparse product
+seconds (one thread) of: the mass element by element from the scalar element's functions (read
+off the vector basis), one copy per component, against skfem's vector form ``rho u . v``; the stiffness element by element against the sparse product
 ``B' (w D B)``; each pair's largest difference relative to the largest entry.
 """
 

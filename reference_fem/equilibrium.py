@@ -40,7 +40,8 @@ class Elastic:
 
     Attributes
     ----------
-    K, M : stiffness and mass on the free dofs (csr)
+    K, M : stiffness and mass on the free dofs (csr); ``B``: the strain operator on them
+        (:attr:`~reference_fem.model.Model.free_B`, made when first read)
     factorizations : int, number of ``splu`` calls on ``K + c M`` or a tangent (1 here)
     sigma : (n_qp, nc) stress of the last solution (Pa), Mandel, mesh frame
     state : the material law's committed state (:mod:`reference_fem.laws`)
@@ -51,24 +52,25 @@ class Elastic:
         self.model = model
         self.c = c
         free = model.free
-        self.B = model.B[:, free].tocsr()
         self.M = model.M[free][:, free]
         self.K = model.stiffness()[free][:, free]
         self.A = (self.K + c * self.M).tocsc()
         self.factorizations = 1
         nc = forms.n_components(model.dim)
         self.sigma = np.zeros((model.n_qp, nc))
-        self._u, self._nc = None, nc  # the solution whose stress is not computed yet (see ``sigma``)
-        self._rows = {}  # a probe's quadrature point -> its rows of B
+        self._u = None  # the solution whose stress is not computed yet (see ``sigma``)
         self.law = model.law
         self.state = self.law.initial_state(model.n_qp)
+
+    @property
+    def B(self):
+        return self.model.free_B
 
     @functools.cached_property
     def lu(self):
         """The factors of ``A``, made when first asked for: after the time march has solved
-        ``M a0 = Q`` and freed the mass's factors: a large 3D run's peak memory holds one set of
-        factors, not both (the flywheel's whole 3D model at 8 round: 8.5 GB instead of 10.2, the
-        same histories to the bit)."""
+        ``M a0 = Q`` (:func:`.linalg.solve_mass`, whose factors, where CG stops short, are freed
+        by then): a large 3D run's peak memory holds one set of factors, not both."""
         return factorize(self.A)
 
     @property
@@ -96,11 +98,8 @@ class Elastic:
         """The stress at quadrature point ``q``, ``(nc,)`` (Mandel, mesh frame)."""
         if self._sigma is not None:
             return self._sigma[q]
-        nc = self._nc
-        if q not in self._rows:
-            self._rows[q] = self.B[q * nc:(q + 1) * nc]
         D = self.model.D if self.model.D.ndim == 2 else self.model.D[q]
-        return D.T @ (self._rows[q] @ self._u)
+        return D.T @ (self.model.free_strain_rows(q) @ self._u)
 
     def strain(self, u: np.ndarray) -> np.ndarray:
         """Mandel strain at every quadrature point, ``(n_qp, nc)``, of free-dof values ``u``."""

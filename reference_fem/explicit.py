@@ -44,6 +44,7 @@ relative slip over the step is taken back the same way, by a tangential impulse 
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import Callable, Iterator
 
@@ -111,17 +112,23 @@ class ExplicitSystem:
         free = model.free
         self.m = model.M.diagonal()[free]
         self.K = model.stiffness()[free][:, free].tocsr()
-        self.B = model.B[:, free].tocsr()
-        self.BT = self.B.T  # a CSC view: its product is faster than that of a CSR copy
         self.law = model.law
         self.plastic = self.law.nonlinear  # else the stress is D eps: the linear path
-        nc = self.B.shape[0] // model.n_qp
+        nc = forms.n_components(model.dim)
         self.state = self.law.initial_state(model.n_qp)
         self._sigma = np.zeros((model.n_qp, nc))
         self._u = np.zeros(free.size)
         self._sigma_of = None  # the u that _sigma belongs to, for elastic runs (computed lazily)
         self.wall = _Wall(model) if model.case.wall is not None else None
         self.pairs = _Pairs(model) if model.case.contacts else None
+
+    @property
+    def B(self):
+        return self.model.free_B  # made when first read (plastic steps, stresses at every point)
+
+    @functools.cached_property
+    def BT(self):
+        return self.B.T  # a CSC view: its product is faster than that of a CSR copy
 
     @property
     def sigma(self) -> np.ndarray:
@@ -135,8 +142,7 @@ class ExplicitSystem:
         an elastic body (a probe must not cost a product over the whole mesh)."""
         if self.plastic:
             return self._sigma[q]
-        nc = self._sigma.shape[1]
-        return forms.at_points(self.model.D, q) @ (self.B[q * nc : (q + 1) * nc] @ self._u)
+        return forms.at_points(self.model.D, q) @ (self.model.free_strain_rows(q) @ self._u)
 
     @property
     def peps(self) -> np.ndarray:
@@ -292,7 +298,7 @@ def output_steps(t_out: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def solve(case, progress: Callable[[int, int], None] | None = None, every: int = 0,
-          grading: float = 1.0, bbar: bool = False, step_divisor: int = 1) -> RunResult:
+          grading: float = 1.0, bbar: bool = False, step_divisor: int = 1, fields: bool = True) -> RunResult:
     """The case's probe histories at ``t = 0, dt, ..., t_end`` by central differences.
 
     The step is :data:`SAFETY` times the critical step (over ``step_divisor``), the same
@@ -309,6 +315,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     grading : mesh grading toward the re-entrant corner lines (:func:`reference_fem.mesh.build_mesh`)
     bbar : the strain operator's volumetric part projected per element (:func:`reference_fem.forms.bbar_operator`)
     step_divisor : a further division of the step, for measuring the time error
+    fields : the final state as ``mesh`` (:func:`reference_fem.solver.solve`'s; False: None)
 
     Returns
     -------
@@ -373,4 +380,5 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
                     **_balance(system, np.zeros_like(v0), v0, "before"), **_balance(system, u, v, "after"))
     return RunResult(t=t_out, history=dict(zip(probes.names, rows.T)), n_dof=int(free.size),
                      iterations=[1] * n_out, converged=True, message="", cpu_time_s=cpu,
-                     mesh=output_mesh(model, u_full, system, v_full), frames=frames, info=info)
+                     mesh=output_mesh(model, u_full, system, v_full) if fields else None, frames=frames,
+                     info=info)

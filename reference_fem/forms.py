@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import BilinearForm, LinearForm
+from skfem import LinearForm
 from skfem.helpers import dot
 
 SQRT2 = np.sqrt(2.0)
@@ -26,51 +26,78 @@ def n_components(dim: int) -> int:
     return 4 if dim == 2 else 6
 
 
-def strain_operator(basis, axisymmetric: bool) -> tuple[sp.csr_matrix, np.ndarray]:
-    """Sparse strain operator ``B`` and the quadrature weights.
+#: elements whose dense strain blocks :func:`stiffness` and :func:`strain_operator` form at once
+#: (a 27-node element's are 105 kB: about a hundred MB of work arrays, whatever the mesh; 2000 at
+#: once ran slower on a first call, its half-GB of fresh pages)
+ELEMENT_CHUNK = 256
+
+
+def strain_operator(basis, axisymmetric: bool, elements=None) -> sp.csr_matrix:
+    """Sparse strain operator ``B``.
 
     Parameters
     ----------
     basis : skfem.CellBasis of an ``ElementVector`` (2D or 3D)
     axisymmetric : mesh coordinates are (r, z); adds the hoop strain ``u_r / r``
+    elements : the elements whose rows to make, in that order (default: every element)
 
     Returns
     -------
-    B : csr_matrix, shape ``(n_qp * n_comp, n_dof)``; row ``q * n_comp + c`` is Mandel
-        component ``c`` at quadrature point ``q = element * n_qp_per_element + k``
-    weights : ndarray, shape ``(n_qp,)``, integration weights (volume; per radian if
-        axisymmetric)
+    csr_matrix, shape ``(n_qp * n_comp, n_dof)``; row ``q * n_comp + c`` is Mandel component
+    ``c`` at quadrature point ``q = element * n_qp_per_element + k`` (of ``elements``: each
+    one's rows the same as in the whole operator)
     """
     nc = n_components(basis.mesh.dim())
-    nel, nqe = basis.dx.shape
-    radius = np.asarray(basis.global_coordinates())[0]
-    rows = (np.arange(nel * nqe)[:, None] * nc + np.arange(nc)).reshape(nel, nqe, nc)
-    data, cols, rr = [], [], []
-    for i in range(basis.Nbfun):
-        values = _function_strain(basis.basis[i][0], radius, axisymmetric)  # (nel, nqe, nc)
-        nonzero = values != 0.0  # a vector basis function moves one component only
-        data.append(values[nonzero])
-        rr.append(rows[nonzero])
-        cols.append(np.broadcast_to(basis.element_dofs[i][:, None, None], values.shape)[nonzero])
-    B = sp.csr_matrix(
-        (np.concatenate(data), (np.concatenate(rr), np.concatenate(cols))),
-        shape=(nel * nqe * nc, basis.N),
+    chosen = np.arange(basis.dx.shape[0]) if elements is None else np.atleast_1d(elements)
+    nqe = basis.dx.shape[1]
+    data, cols, rows = [], [], []
+    for start in range(0, chosen.size, ELEMENT_CHUNK):
+        chunk = chosen[start:start + ELEMENT_CHUNK]
+        Be = element_strains(basis, axisymmetric, chunk)  # (n, nqe, nc, n_local)
+        points = start * nqe + np.arange(chunk.size * nqe)
+        row = (points[:, None] * nc + np.arange(nc)).reshape(chunk.size, nqe, nc)
+        for i in range(basis.Nbfun):
+            values = Be[..., i]
+            nonzero = values != 0.0  # a vector basis function moves one component only
+            data.append(values[nonzero])
+            rows.append(row[nonzero])
+            cols.append(np.broadcast_to(basis.element_dofs[i][chunk][:, None, None], values.shape)[nonzero])
+    return sp.csr_matrix(
+        (np.concatenate(data), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(chosen.size * nqe * nc, basis.N),
     )
-    weights = (basis.dx * (radius if axisymmetric else 1.0)).ravel()
-    return B, weights
 
 
-def _function_strain(field, radius: np.ndarray, axisymmetric: bool, elements=slice(None)) -> np.ndarray:
-    """Mandel strain of one vector basis function (skfem's ``DiscreteField``) at the quadrature
-    points of ``elements``, ``(n_elements, n_qp, nc)``; ``radius`` of every element's points."""
-    g = field.grad[:, :, elements]  # (dim, dim, nel, nqe): g[a, b] = d u_a / d x_b
-    if g.shape[0] == 2:
-        hoop = np.asarray(field)[0][elements] / radius[elements] if axisymmetric else np.zeros_like(g[0, 0])
-        comps = [g[0, 0], g[1, 1], hoop, (g[0, 1] + g[1, 0]) / SQRT2]
-    else:
-        comps = [g[0, 0], g[1, 1], g[2, 2], (g[1, 2] + g[2, 1]) / SQRT2,
-                 (g[0, 2] + g[2, 0]) / SQRT2, (g[0, 1] + g[1, 0]) / SQRT2]
-    return np.stack(comps, axis=-1)
+def quadrature_weights(basis, axisymmetric: bool) -> np.ndarray:
+    """The integration weights ``(n_qp,)``, quadrature points numbered as the rows of
+    :func:`strain_operator`: volume, or per radian (times ``r``) when axisymmetric."""
+    radius = np.asarray(basis.global_coordinates())[0] if axisymmetric else 1.0
+    return (basis.dx * radius).ravel()
+
+
+#: the Mandel shear components' index pairs: 2D ``sqrt2 xy``; 3D ``sqrt2 yz, xz, xy``
+SHEAR = {2: ((0, 1),), 3: ((1, 2), (0, 2), (0, 1))}
+
+
+def element_strains(basis, axisymmetric: bool, elements) -> np.ndarray:
+    """Mandel strains of every vector function of ``basis`` at the quadrature points of
+    ``elements``, ``(n_elements, n_qp, nc, n_local)``: the vector function ``dim j + a`` is the
+    scalar function ``j`` along component ``a``, so its strains are the scalar gradient's
+    entries placed (normal ``a``; the shears that pair ``a`` with another direction, over sqrt 2;
+    axisymmetric: the hoop strain ``phi / r`` of the radial ones)."""
+    dim = basis.mesh.dim()
+    scalars = [basis.basis[dim * j][0] for j in range(basis.Nbfun // dim)]  # along component 0
+    G = np.stack([f.grad[0][:, elements] for f in scalars], axis=-1)  # (dim, n, nqe, n_scalar)
+    Be = np.zeros(G.shape[1:3] + (n_components(dim), G.shape[3], dim))
+    for k in range(dim):
+        Be[:, :, k, :, k] = G[k]
+    for c, (k, l) in enumerate(SHEAR[dim], start=n_components(dim) - len(SHEAR[dim])):
+        Be[:, :, c, :, k] = G[l] / SQRT2
+        Be[:, :, c, :, l] = G[k] / SQRT2
+    if axisymmetric:
+        radius = np.asarray(basis.global_coordinates())[0][elements]
+        Be[:, :, 2, :, 0] = np.stack([np.asarray(f)[0][elements] for f in scalars], axis=-1) / radius[..., None]
+    return Be.reshape(Be.shape[:3] + (-1,))
 
 
 def elastic_matrix(lam: float, mu: float, dim: int) -> np.ndarray:
@@ -105,12 +132,6 @@ def material_blocks(D: np.ndarray, weights: np.ndarray) -> sp.bsr_matrix:
     return sp.bsr_matrix((D, np.arange(nq), np.arange(nq + 1)), shape=(nq * D.shape[1],) * 2)
 
 
-#: elements whose dense strain blocks :func:`stiffness` forms at once (a 27-node element's are
-#: 105 kB: about a hundred MB of work arrays, whatever the mesh; 2000 at once ran slower on a
-#: first call, its half-GB of fresh pages)
-ELEMENT_CHUNK = 256
-
-
 def stiffness(basis, axisymmetric: bool, weights: np.ndarray, D: np.ndarray,
               projection: np.ndarray | None = None) -> sp.csr_matrix:
     """``K = B^T diag(w D) B`` (N/m, or N/m per radian when axisymmetric), element by element.
@@ -124,13 +145,11 @@ def stiffness(basis, axisymmetric: bool, weights: np.ndarray, D: np.ndarray,
     """
     nel, nqe = basis.dx.shape
     nc = D.shape[-1]
-    radius = np.asarray(basis.global_coordinates())[0]
     wD = (np.broadcast_to(D, (weights.size, nc, nc)) * weights[:, None, None]).reshape(nel, nqe, nc, nc)
     parts = []  # each chunk's sum (its duplicates summed: a few times fewer entries than its blocks)
     for start in range(0, nel, ELEMENT_CHUNK):
         chunk = slice(start, min(start + ELEMENT_CHUNK, nel))
-        Be = np.stack([_function_strain(basis.basis[i][0], radius, axisymmetric, chunk)
-                       for i in range(basis.Nbfun)], axis=-1)  # (n, nqe, nc, n_local)
+        Be = element_strains(basis, axisymmetric, chunk)  # (n, nqe, nc, n_local)
         if projection is not None:
             theta = Be[:, :, :3].sum(axis=2)  # (n, nqe, n_local)
             Be[:, :, :3] += (projection[chunk] @ theta)[:, :, None] / 3.0
@@ -139,10 +158,14 @@ def stiffness(basis, axisymmetric: bool, weights: np.ndarray, D: np.ndarray,
         dofs = basis.element_dofs[:, chunk].T
         rows = np.broadcast_to(dofs[:, :, None], Ke.shape).ravel()
         cols = np.broadcast_to(dofs[:, None, :], Ke.shape).ravel()
-        parts.append(sp.coo_matrix((Ke.ravel(), (rows, cols)), shape=(basis.N, basis.N)).tocsr().tocoo())
-    K = sp.csr_matrix((np.concatenate([c.data for c in parts]), (np.concatenate([c.row for c in parts]),
-                                                                  np.concatenate([c.col for c in parts]))),
-                      shape=(basis.N, basis.N))
+        parts.append(sp.coo_matrix((Ke.ravel(), (rows, cols)), shape=(basis.N, basis.N)).tocsr())
+    if len(parts) > 1:
+        parts = [part.tocoo() for part in parts]
+        K = sp.csr_matrix((np.concatenate([c.data for c in parts]), (np.concatenate([c.row for c in parts]),
+                                                                      np.concatenate([c.col for c in parts]))),
+                          shape=(basis.N, basis.N))
+    else:
+        K = parts[0]
     K.eliminate_zeros()
     return K
 
@@ -150,13 +173,6 @@ def stiffness(basis, axisymmetric: bool, weights: np.ndarray, D: np.ndarray,
 def internal_forces(B: sp.csr_matrix, weights: np.ndarray, sigma: np.ndarray) -> np.ndarray:
     """Nodal internal forces ``B^T (w sigma)`` from Mandel stresses ``sigma``, shape ``(n_qp, nc)``."""
     return B.T @ (sigma * weights[:, None]).ravel()
-
-
-@BilinearForm
-def scalar_mass(u, v, w):
-    """``rho u v`` of scalar functions, times the radius ``w.weight`` when axisymmetric: each
-    component's block of the consistent mass ``rho u . v`` (:func:`reference_fem.mass.consistent_mass`)."""
-    return w.rho * u * v * w.weight
 
 
 @LinearForm

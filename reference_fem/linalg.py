@@ -27,6 +27,23 @@ def factorize(A) -> sla.SuperLU:
                     options={"SymmetricMode": True})
 
 
+#: the consistent mass solved by conjugate gradients stops at this residual relative to the
+#: right-hand side's: round-off (its solution equals the factorized mass's to about 1e-14)
+MASS_RTOL = 1e-14
+#: CG iterations on the mass before it is factorized after all (Jacobi-preconditioned, the
+#: consistent mass of these elements takes 30-40)
+MASS_MAX_ITERATIONS = 500
+
+
+def solve_mass(M, b: np.ndarray) -> np.ndarray:
+    """``M x = b`` for a consistent mass ``M`` (positive definite, its condition bounded on any
+    mesh): conjugate gradients preconditioned by its diagonal, which leave no factors in
+    memory and cost a fraction of a factorization in 3D; the factors if CG stops short."""
+    x, info = sla.cg(M, b, rtol=MASS_RTOL, atol=0.0, maxiter=MASS_MAX_ITERATIONS,
+                     M=sla.LinearOperator(M.shape, matvec=lambda r, d=M.diagonal(): r / d, dtype=float))
+    return x if info == 0 and np.isfinite(x).all() else factorize(M).solve(b)
+
+
 #: how a Newton tangent ``K_t + c M`` is solved (the reference FEM's option ``linear_solver``):
 #: ``superlu`` factorizes each tangent; ``pcg`` runs conjugate gradients on it, preconditioned
 #: by the factors of the elastic ``K + c M`` that every step already has (the tangent differs

@@ -16,9 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import asm
-
-from . import forms, ties
+from . import ties
 
 #: Gauss points per direction along the layer (as the model's INTORDER = 4 rule)
 N_GAUSS = 3
@@ -34,18 +32,31 @@ def density(basis, rho: float | np.ndarray) -> float | np.ndarray:
     return np.ascontiguousarray(np.broadcast_to(np.asarray(rho)[elements][:, None], basis.dx.shape))
 
 
+def scalar_functions(basis) -> tuple[np.ndarray, np.ndarray]:
+    """The scalar element's functions at the quadrature points of a vector ``basis``, ``(n_local,
+    n_elements, n_qp)``, and their dofs ``(n_local, n_elements)``: the vector element's function
+    ``dim j`` is the scalar function ``j`` in component 0, at ``dim`` times its scalar dof (dof
+    ``dim * i + c`` is component c at scalar dof i), so no scalar basis is built."""
+    dim = basis.mesh.dim()
+    phi = np.array([np.asarray(basis.basis[dim * j][0])[0] for j in range(basis.Nbfun // dim)])
+    return phi, basis.element_dofs[::dim] // dim
+
+
 def consistent_mass(basis, rho: float | np.ndarray, axisymmetric: bool, factor: np.ndarray | None = None
                     ) -> sp.csr_matrix:
     """``int rho u . v`` (times r when axisymmetric) over the elements of ``basis``; ``rho`` a
     number or one per element of the mesh (:func:`density`); ``factor`` (n_elements, n_qp): the
     density's variation at the quadrature points."""
-    # the scalar element's mass, one copy per component: a vector form would call its kernel for
-    # every pair of the element's vector functions, dim^2 times as many (the 3D thick cylinder
-    # at refine 2: 2.6 CPU s); dof ``dim * i + c`` is component c at scalar dof i
-    scalar = ties.cell_basis(basis.mesh, basis.elem.elem, quadrature=basis.quadrature, elements=basis.tind)
-    r = np.asarray(scalar.global_coordinates())[0] if axisymmetric else np.ones(scalar.dx.shape)
-    weight = r * (1.0 if factor is None else factor)
-    M = asm(forms.scalar_mass, scalar, rho=density(scalar, rho), weight=weight)
+    # the scalar element's mass element by element, one copy per component: a vector form would
+    # evaluate every pair of the element's vector functions, dim^2 times as many
+    phi, dofs = scalar_functions(basis)
+    r = np.asarray(basis.global_coordinates())[0] if axisymmetric else 1.0
+    w = density(basis, rho) * basis.dx * r * (1.0 if factor is None else factor)  # (n_elements, n_qp)
+    Me = np.einsum("ieq,jeq,eq->eij", phi, phi, w)
+    rows = np.broadcast_to(dofs.T[:, :, None], Me.shape).ravel()
+    cols = np.broadcast_to(dofs.T[:, None, :], Me.shape).ravel()
+    n = basis.N // basis.mesh.dim()
+    M = sp.csr_matrix((Me.ravel(), (rows, cols)), shape=(n, n))
     return sp.kron(M, sp.identity(basis.mesh.dim()), format="csr")
 
 
@@ -59,12 +70,12 @@ def lumped_mass(basis, rho: float | np.ndarray, axisymmetric: bool,
     motion then has no inertia) and the total mass is kept. Same units and ``rho`` as
     :func:`consistent_mass`.
     """
-    scalar = ties.cell_basis(basis.mesh, basis.elem.elem, quadrature=basis.quadrature)
-    r = np.asarray(scalar.global_coordinates())[0] if axisymmetric else np.ones(scalar.dx.shape)
-    w = density(scalar, rho) * scalar.dx * r * (1.0 if factor is None else factor)  # (n_elements, n_qp)
-    diag = np.array([np.einsum("eq,eq->e", np.asarray(phi[0]) ** 2, w) for phi in scalar.basis])  # (n_local, nel)
+    phi, dofs = scalar_functions(basis)
+    r = np.asarray(basis.global_coordinates())[0] if axisymmetric else np.ones(basis.dx.shape)
+    w = density(basis, rho) * basis.dx * r * (1.0 if factor is None else factor)  # (n_elements, n_qp)
+    diag = np.array([np.einsum("eq,eq->e", p ** 2, w) for p in phi])  # (n_local, nel)
     share = diag * (w.sum(axis=1) / diag.sum(axis=0))
-    nodes = np.bincount(scalar.element_dofs.ravel(), share.ravel(), minlength=scalar.N)
+    nodes = np.bincount(dofs.ravel(), share.ravel(), minlength=basis.N // basis.mesh.dim())
     return np.repeat(nodes, basis.mesh.dim())
 
 

@@ -66,14 +66,31 @@ INSIDE_TOL = 1e-8
 
 
 class _Mapping(MappingIsoparametric):
-    """Isoparametric mapping whose inverse stops at :data:`INVF_TOL`.
+    """Isoparametric mapping whose inverse stops at :data:`INVF_TOL`, and whose inverse
+    Jacobian is kept for the points last asked for.
 
     scikit-fem's default (1e-12) lies below round-off for thin curved elements far from the
-    origin (the 3D dome: 0.2 in thick at 22 in), where Newton then stalls.
+    origin (the 3D dome: 0.2 in thick at 22 in), where Newton then stalls. A basis asks for the
+    inverse Jacobian once per shape function, at the same points: scikit-fem computes it again
+    each time (81 times for a 27-node vector element); a facet basis inverts the map twice, for
+    its points and for their normals, in the same elements.
     """
 
     def invF(self, x, tind=None, newton_max_iters=50, newton_tol=INVF_TOL):
+        last = getattr(self, "_last_invF", None)
+        if last is None or last[0] is not x or not np.array_equal(last[1], tind) or last[2] != newton_tol:
+            last = self._last_invF = (x, tind, newton_tol, self._inverse(x, tind, newton_max_iters, newton_tol))
+        return last[3]
+
+    def _inverse(self, x, tind, newton_max_iters, newton_tol):
         return super().invF(x, tind, newton_max_iters, newton_tol)
+
+    def invDF(self, X, tind=None):
+        last = getattr(self, "_last_invDF", None)
+        if last is None or last[0] is not X or last[1] is not tind:
+            # the arguments are kept with it, so their identities stand for their values
+            last = self._last_invDF = (X, tind, super().invDF(X, tind))
+        return last[2]
 
 
 class _AxisMapping(_Mapping):
@@ -82,7 +99,7 @@ class _AxisMapping(_Mapping):
     (a line: one direction of the Jacobian vanishes) moves along the other two, and it stops at
     the step tolerance without raising; the caller checks how near the point it came."""
 
-    def invF(self, x, tind=None, newton_max_iters=50, newton_tol=INVF_TOL):
+    def _inverse(self, x, tind, newton_max_iters, newton_tol):
         X = np.zeros(x.shape) + 0.5
         for _ in range(newton_max_iters):
             J = np.moveaxis(self.DF(X, tind), (0, 1), (-2, -1))  # (n_elements, n_points, dim, dim)

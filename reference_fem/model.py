@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import scipy.sparse as sp
 from skfem import ElementHex2, ElementQuad2, ElementVector, asm
@@ -26,9 +28,9 @@ class Model:
     ----------
     case, rmesh : the case and its :class:`~reference_fem.mesh.RefMesh`
     basis : skfem.CellBasis of the vector quadratic element
-    B, weights : strain operator ``(n_qp * nc, n_dof)`` and weights ``(n_qp,)``
-        (see :func:`reference_fem.forms.strain_operator`); ``bbar``: its volumetric part
-        projected per element (:func:`reference_fem.forms.bbar_operator`)
+    B, weights : strain operator ``(n_qp * nc, n_dof)``, made when first read, and weights
+        ``(n_qp,)`` (see :func:`reference_fem.forms.strain_operator`); ``bbar``: its volumetric
+        part projected per element (:func:`reference_fem.forms.bbar_operator`)
     x_qp : ndarray, ``(dim, n_qp)``, quadrature points in mesh coordinates
     M : csr_matrix, consistent mass (kg, or kg per radian when axisymmetric); with a wall, the
         layer at the wall's face redistributed (:mod:`reference_fem.mass`); ``lumped``: the
@@ -63,14 +65,13 @@ class Model:
         self.element = ElementVector(scalar)
         self.basis = ties.cell_basis(mesh, self.element, intorder=INTORDER)
         axisym = self.rep == AXISYMMETRIC
-        self.B, self.weights = forms.strain_operator(self.basis, axisym)
+        self.weights = forms.quadrature_weights(self.basis, axisym)
         self.x_qp = np.asarray(self.basis.global_coordinates()).reshape(self.dim, -1)
         #: ``(dim, n_nodes)``: the nodes of the unknowns (a node tied on the axis once, :mod:`.ties`)
         self.nodes_x = ties.node_positions(mesh)
         #: B-bar's volumetric projection per element, or None (:func:`~reference_fem.forms.volumetric_projection`)
         self.projection = forms.volumetric_projection(self.weights, self.x_qp, self.basis.dx.shape[1]) if bbar else None
-        if bbar:
-            self.B = forms.bbar_operator(self.B, self.projection)
+        self._free_rows = {}  # a stress probe's point -> its rows of B on the free dofs
         self.lam, self.mu = case.material.lame
         #: each element's index into ``case.materials`` (0 everywhere without regions)
         self.material_index = regions.mesh_material_index(case, self.rep, mesh, self.rmesh.section, self.rmesh.parent)
@@ -118,15 +119,48 @@ class Model:
     def n_qp(self) -> int:
         return self.weights.shape[0]
 
+    @functools.cached_property
+    def B(self) -> sp.csr_matrix:
+        """The strain operator (:func:`~reference_fem.forms.strain_operator`; B-bar's with a
+        ``projection``), made when first read: by plastic steps and stresses at every point,
+        not by an elastic run, whose probes read their points' rows (:meth:`strain_rows`)."""
+        B = forms.strain_operator(self.basis, self.rep == AXISYMMETRIC)
+        return B if self.projection is None else forms.bbar_operator(B, self.projection)
+
+    @functools.cached_property
+    def free_B(self) -> sp.csr_matrix:
+        """:attr:`B`'s columns of the free dofs (the equilibrium systems' strain operator)."""
+        return self.B[:, self.free].tocsr()
+
+    def strain_rows(self, q: int) -> sp.csr_matrix:
+        """The rows of :attr:`B` at quadrature point ``q``, ``(nc, n_dof)``: of its element
+        alone unless ``B`` is made or B-bar's (whose projection is made over the whole mesh)."""
+        nc = forms.n_components(self.dim)
+        if "B" in self.__dict__ or self.projection is not None:
+            return self.B[q * nc:(q + 1) * nc]
+        element, k = divmod(q, self.basis.dx.shape[1])
+        return forms.strain_operator(self.basis, self.rep == AXISYMMETRIC, element)[k * nc:(k + 1) * nc]
+
+    def free_strain_rows(self, q: int) -> sp.csr_matrix:
+        """:meth:`strain_rows` of the free dofs, kept per point (a stress probe reads them every step)."""
+        if q not in self._free_rows:
+            self._free_rows[q] = self.strain_rows(q)[:, self.free]
+        return self._free_rows[q]
+
     def stiffness(self) -> sp.csr_matrix:
         """Elastic stiffness (N/m, or N/m per radian when axisymmetric)."""
         return forms.stiffness(self.basis, self.rep == AXISYMMETRIC, self.stiffness_weights(), self.D,
                                self.projection)
 
     def stiffness_times(self, x: np.ndarray) -> np.ndarray:
-        """``K x`` (full dofs) without forming ``K``: ``B^T (w D) B x``, two products with ``B``
-        (a probe's row of K: forming K again for it cost 2.9 of a 3D rod run's 20 CPU s)."""
-        return self.B.T @ (forms.material_blocks(self.D, self.stiffness_weights()) @ (self.B @ x))
+        """``K x`` (full dofs) without forming ``K``: the stiffness of the elements ``x`` is
+        nonzero on (a probe's row of K: a face's few elements)."""
+        elements = np.flatnonzero(np.any(x[self.basis.element_dofs] != 0, axis=0))
+        points = (elements[:, None] * self.basis.dx.shape[1] + np.arange(self.basis.dx.shape[1])).ravel()
+        basis = ties.cell_basis(self.rmesh.mesh, self.element, intorder=INTORDER, elements=elements)
+        return forms.stiffness(basis, self.rep == AXISYMMETRIC, self.stiffness_weights()[points],
+                               forms.at_points(self.D, points),
+                               None if self.projection is None else self.projection[elements]) @ x
 
     def stiffness_weights(self) -> np.ndarray:
         """The quadrature weights the stiffness integrates with: ``weights`` times the material's

@@ -48,8 +48,13 @@ class MovingPressure:
         self.facets = model.edge_facets(load.edge)
         self.fdim = model.dim - 1
         self.z0, self.dz, self.along = self._x3_along_facets()
-        self.columns = self._columns(self._basis(self.facets, self._rule(0.0, 1.0, 0)))  # each facet's whole load
         self.dofs, self.antiderivative = self._tables()
+        # each facet's whole load: its antiderivative from one end to the other
+        whole = self.antiderivative @ (np.polynomial.legendre.legvander(np.ones(1), ALONG)
+                                       - np.polynomial.legendre.legvander(-np.ones(1), ALONG))[0]
+        cols = np.broadcast_to(np.arange(self.facets.size), self.dofs.shape)
+        self.columns = sp.csc_matrix((whole.T.ravel(), (self.dofs.ravel(), cols.ravel())),
+                                     shape=(model.basis.N, self.facets.size))
 
     def _basis(self, facets, quadrature) -> FacetBasis:
         return ties.facet_basis(self.model.rmesh.mesh, self.model.element, facets=facets, quadrature=quadrature)
@@ -58,7 +63,7 @@ class MovingPressure:
         """Per facet: x3 at its reference origin, its change along the reference coordinate it
         varies along, and which coordinate that is; refused if x3 is not affine along one."""
         X = np.hstack([np.zeros((max(self.fdim, 1), 1)), np.eye(max(self.fdim, 1))])  # origin and unit points
-        x = np.asarray(self._basis(self.facets, (X, np.ones(X.shape[1]))).global_coordinates())  # (dim, nf, np)
+        x = self.model.rmesh.mesh.mapping().G(X, find=self.facets)  # (dim, nf, np), as a facet basis maps them
         x3 = x3_of(self.case, self.model.rep, x.reshape(x.shape[0], -1)).reshape(x.shape[1:])
         d = x3[:, 1:] - x3[:, :1]
         if self.case.body == RING:
@@ -71,13 +76,13 @@ class MovingPressure:
                                   "x3 affine along one side)")
         return x3[:, 0], dz, along
 
-    def _rule(self, lo: float, hi: float, along: int, points=None):
-        """A Gauss rule on the facet's reference cell, ``[lo, hi]`` along coordinate ``along``
-        (or ``points`` along it, each of weight 1)."""
-        g, w = np.polynomial.legendre.leggauss(POINTS)
-        s, ws = (lo + (hi - lo) * 0.5 * (g + 1), 0.5 * (hi - lo) * w) if points is None else (points, np.ones(len(points)))
+    def _rule(self, along: int, points: np.ndarray):
+        """A rule on the facet's reference cell: ``points`` along coordinate ``along``, each of
+        weight 1, Gauss across."""
+        s, ws = points, np.ones(len(points))
         if self.fdim == 1:
             return s[None, :], ws
+        g, w = np.polynomial.legendre.leggauss(POINTS)
         r, wr = 0.5 * (g + 1), 0.5 * w
         a, b = np.meshgrid(s, r, indexing="ij")
         X = np.stack([a.ravel(), b.ravel()] if along == 0 else [b.ravel(), a.ravel()])
@@ -94,7 +99,7 @@ class MovingPressure:
         anti = np.empty((self.facets.size, n_local, ALONG + 1))
         for along in np.unique(self.along):
             mine = np.flatnonzero(self.along == along)
-            fb = self._basis(self.facets[mine], self._rule(0.0, 1.0, int(along), points=0.5 * (x + 1)))
+            fb = self._basis(self.facets[mine], self._rule(int(along), 0.5 * (x + 1)))
             n = np.asarray(fb.normals)
             per_point = -np.stack([np.einsum("dfq,dfq,fq->fq", np.asarray(fb.basis[i][0]), n, fb.dx)
                                    for i in range(fb.Nbfun)], axis=1)  # (facets, n_local, points)
@@ -103,18 +108,6 @@ class MovingPressure:
             dofs[:, mine] = fb.element_dofs
             anti[mine] = 0.5 * np.polynomial.legendre.legint(coefficients, axis=-1)  # ds = dx / 2
         return dofs, anti
-
-    def _local(self, fb: FacetBasis) -> np.ndarray:
-        """(n_local, n_facets): the unit pressure's load on each local dof, ``int -n . v ds``."""
-        n = np.asarray(fb.normals)
-        return -np.stack([np.einsum("dfq,dfq,fq->f", np.asarray(fb.basis[i][0]), n, fb.dx)
-                          for i in range(fb.Nbfun)])
-
-    def _columns(self, fb: FacetBasis) -> sp.csc_matrix:
-        local = self._local(fb)
-        cols = np.broadcast_to(np.arange(local.shape[1]), local.shape)
-        return sp.csc_matrix((local.ravel(), (fb.element_dofs.ravel(), cols.ravel())),
-                             shape=(self.model.basis.N, local.shape[1]))
 
     def coverage(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """Per facet, the covered range ``[lo, hi]`` of its reference coordinate along x3 (an

@@ -15,7 +15,7 @@ import numpy as np
 
 from cases.timeint import ALPHA, DELTA
 
-from .linalg import factorize
+from .linalg import solve_mass
 
 
 @dataclass(frozen=True)
@@ -77,8 +77,8 @@ def initial_acceleration(M, r0: np.ndarray) -> np.ndarray:
     which follow the body quasi-statically, get none (their first step puts them in place)."""
     massive = M.diagonal() > 0
     if massive.all():
-        return factorize(M).solve(r0)
+        return solve_mass(M, r0)
     on = np.flatnonzero(massive)
     a = np.zeros_like(r0)
-    a[on] = factorize(M[on][:, on]).solve(r0[on])
+    a[on] = solve_mass(M[on][:, on], r0[on])
     return a

@@ -98,15 +98,24 @@ class Probes:
         return lambda u, v, a, s: (k_row @ u + m_row @ a)[0] - q
 
 
+#: a probe point this close to a node (relative to the mesh's size) is read at the node
+AT_NODE = 1e-12
+
+
 def value_probes(basis, x: np.ndarray) -> sp.csr_matrix:
     """The rows ``(dim, n_dof)`` that read a vector field of ``basis`` at the point ``x`` (dim,),
-    component by component: ``basis.probes`` from the shape functions' values alone. scikit-fem's
-    evaluates their gradients too, which need the map's inverse Jacobian: at a point on the axis
-    of a section swept round it (:mod:`reference_fem.ties`) that Jacobian is singular, and the
-    value is read all the same."""
+    component by component: the node's dofs where ``x`` is a node (the shape functions there are
+    one and zeros: no map to invert), else ``basis.probes`` from the shape functions' values
+    alone. scikit-fem's evaluates their gradients too, which need the map's inverse Jacobian: at
+    a point on the axis of a section swept round it (:mod:`reference_fem.ties`) that Jacobian is
+    singular, and the value is read all the same."""
+    dim = basis.elem.dim
+    gap = np.linalg.norm(basis.doflocs[:, ::dim] - x[:, None], axis=0)
+    if gap.min() <= AT_NODE * np.abs(basis.doflocs).max():
+        dofs = dim * np.argmin(gap) + np.arange(dim)
+        return sp.csr_matrix((np.ones(dim), (np.arange(dim), dofs)), shape=(dim, basis.N))
     cell = int(basis.mesh.element_finder(mapping=basis.mapping)(*x[:, None])[0])
     local = basis.mapping.invF(x[:, None, None], tind=np.array([cell]))[:, 0, :]  # (dim, 1)
-    dim = basis.elem.dim
     phi = np.array([basis.elem.elem.lbasis(local, i)[0][0] for i in range(basis.Nbfun // dim)])  # scalar functions
     rows = np.tile(np.arange(dim), basis.Nbfun // dim)  # local dof l: function l // dim, component l % dim
     values = np.repeat(phi, dim)

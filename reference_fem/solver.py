@@ -43,7 +43,7 @@ def load_history(model):
 
 
 def solve(case, progress: Callable[[int, int], None] | None = None, every: int = 0,
-          grading: float = 1.0, linear_solver: str = AUTO, bbar: bool = False) -> RunResult:
+          grading: float = 1.0, linear_solver: str = AUTO, bbar: bool = False, fields: bool = True) -> RunResult:
     """Transient response of ``case`` over its time window, Newmark (alpha 0.25, delta 0.5).
 
     Parameters
@@ -57,13 +57,14 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     bbar : the volumetric strain projected per element (B-bar, as the explicit engine's option):
         nearly incompressible plastic flow does not lock the element (the notched cylinder 2D at
         r1 and r2: 4.3 and 2.9 % from its truth against 6.5 and 4.3 % without)
+    fields : the final state as ``mesh`` (False: None, and no stress at every point is made)
 
     Returns
     -------
     cases.result.RunResult
         ``iterations``: Newton iterations per step (1 for a linear step; with a wall, the
         active-set iterations); ``cpu_time_s``: assembly, factorization and time stepping, mesh
-        generation excluded; ``mesh``: the final state (cartesian points; point data
+        generation excluded; ``mesh`` (with ``fields``): the final state (cartesian points; point data
         'displacement', 'velocity'; cell data 'stress', the element mean as a cartesian tensor,
         'peps', the element mean, when plastic, and 'region', the element's index into
         ``case.materials``); ``info``: 'dim',
@@ -123,7 +124,7 @@ def solve(case, progress: Callable[[int, int], None] | None = None, every: int =
     cpu = time.process_time() - cpu1
     exact = {} if case.exact is None else {"error_l2": error_l2(model, u_full, case.exact, recorder.last_time)}
     return recorder.result(
-        n_dof=int(free.size), cpu_time_s=cpu, mesh=output_mesh(model, u_full, system, v_full),
+        n_dof=int(free.size), cpu_time_s=cpu, mesh=output_mesh(model, u_full, system, v_full) if fields else None,
         info=dict(_info(model, system, cpu_mesh), grading=grading, linear_solver=linear_solver, bbar=bbar,
                   **(log.info() if log else {}), **exact),
     )

@@ -4,6 +4,7 @@ benchmarks/README.md come from these scripts at full size."""
 from __future__ import annotations
 
 import importlib.util
+import sys
 from pathlib import Path
 
 import pytest
@@ -14,6 +15,7 @@ BENCHMARKS = sorted((Path(__file__).resolve().parents[1] / "benchmarks").glob("*
 def load(path: Path):
     spec = importlib.util.spec_from_file_location(f"benchmark_{path.stem}", path)
     module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # (a dataclass there looks its module up by name)
     spec.loader.exec_module(module)
     return module
 

@@ -277,13 +277,13 @@ def _smfem(case, progress, fields, every, options) -> RunResult:
 def _reference(case, progress, fields, every, options) -> RunResult:
     from reference_fem import solve as reference
 
-    return reference(case, progress=progress, every=every, **(options or {}))
+    return reference(case, progress=progress, every=every, fields=fields, **(options or {}))
 
 
 def _explicit(case, progress, fields, every, options) -> RunResult:
     from reference_fem.explicit import solve as explicit
 
-    return explicit(case, progress=progress, every=every, **(options or {}))
+    return explicit(case, progress=progress, every=every, fields=fields, **(options or {}))
 
 
 def _modal(case, progress, fields, every, options) -> RunResult:

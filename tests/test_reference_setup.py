@@ -1,0 +1,110 @@
+"""The reference FEM's set-up, made cheaper, gives the numbers it gave: the initial acceleration
+by CG on the mass, the strain operator made only where stresses are read (a probe's rows from
+its element alone), a face's row of K from the face's elements, the mass element by element,
+a probe at a node read at the node, and the mapping's inverse kept for the points last asked
+for (benchmarks/competitor_profile.py measures the set-up's share of each run)."""
+
+from __future__ import annotations
+
+from functools import partial
+
+import numpy as np
+import pytest
+from skfem import BilinearForm, asm
+from skfem.helpers import dot
+from skfem.mapping import MappingIsoparametric
+
+from cases import get_case
+from reference_fem import ties
+from reference_fem.linalg import factorize, solve_mass
+from reference_fem.mass import consistent_mass
+from reference_fem.mesh import INVF_TOL
+from reference_fem.model import AXISYMMETRIC, INTORDER, Model
+from reference_fem.probes import value_probes
+
+#: small models of each representation: axisymmetric, 3D solid, 3D with the axis tied, B-bar
+MODELS = {"dome 2D": ("dome", {}, False), "thick cylinder 3D": ("thick_cylinder", {"dim": 3}, False),
+          "notched cylinder B-bar": ("notched_cylinder", {}, True)}
+
+
+@pytest.fixture(scope="module", params=list(MODELS))
+def model(request):
+    name, sets, bbar = MODELS[request.param]
+    return Model(get_case(name, sets), bbar=bbar)
+
+
+@BilinearForm
+def _vector_mass(u, v, w):
+    return w.rho * dot(u, v) * w.weight
+
+
+def test_the_mass_solved_by_cg_equals_its_factors(model):
+    M, b = model.M[model.free][:, model.free], model.Q[model.free]
+    expected = factorize(M).solve(b)
+    assert np.abs(solve_mass(M, b) - expected).max() <= 1e-13 * np.abs(expected).max()
+
+
+def test_the_mass_element_by_element_equals_the_vector_form(model):
+    basis = model.basis
+    radius = np.asarray(basis.global_coordinates())[0] if model.rep == AXISYMMETRIC else np.ones(basis.dx.shape)
+    expected = asm(_vector_mass, basis, rho=model.case.material.rho, weight=radius)
+    M = consistent_mass(basis, model.case.material.rho, model.rep == AXISYMMETRIC)
+    assert abs(M - expected).max() <= 1e-14 * abs(expected).max()
+
+
+def test_a_points_strain_rows_are_the_strain_operators(model):
+    """Made from its element alone before ``B`` is (B-bar: from ``B``), they equal ``B``'s rows
+    to the bit."""
+    points = np.random.default_rng(0).choice(model.n_qp, 5, replace=False)
+    rows = [model.strain_rows(int(q)).toarray() for q in points]
+    nc = rows[0].shape[0]
+    for q, r in zip(points, rows):
+        assert np.array_equal(r, model.B[q * nc:(q + 1) * nc].toarray())
+
+
+def test_a_faces_row_of_k_from_its_elements_equals_k(model):
+    x = np.zeros(model.basis.N)
+    x[model.basis.get_dofs(facets=model.rmesh.mesh.boundary_facets()[:7]).flatten()] = 1.0
+    expected = model.stiffness() @ x
+    assert np.abs(model.stiffness_times(x) - expected).max() <= 1e-13 * np.abs(expected).max()
+
+
+def test_a_probe_at_a_node_reads_the_node_as_the_element_map_does(model):
+    basis = model.basis
+    node = basis.element_dofs[-1, basis.dx.shape[0] // 2] // model.dim  # an element's centre node
+    x = basis.doflocs[:, model.dim * node]
+    rows = value_probes(basis, x)
+    assert rows.nnz == model.dim and np.array_equal(rows.indices, model.dim * node + np.arange(model.dim))
+    u = np.random.default_rng(1).normal(size=basis.N)
+    shifted = value_probes(basis, x + 1e-9 * np.abs(basis.doflocs).max())  # by the element's map
+    assert np.abs(rows @ u - shifted @ u).max() <= 1e-6 * np.abs(u).max()
+
+
+def test_the_kept_inverse_map_gives_the_bases_scikit_fem_gives():
+    """A cell and a facet basis on the reference's mapping, which keeps the inverse Jacobian and
+    the inverse map of the points last asked for, equal those on scikit-fem's own."""
+    model = Model(get_case("thick_cylinder", {"dim": 3}))
+    mesh, element = model.rmesh.mesh, model.element
+    plain = type(mesh.mapping())(mesh, mesh.elem(), mesh.bndelem)  # its methods without what they keep
+    plain.invDF = partial(MappingIsoparametric.invDF, plain)
+    plain.invF = lambda x, tind=None, newton_max_iters=50, newton_tol=INVF_TOL: plain._inverse(
+        x, tind, newton_max_iters, newton_tol)
+    for make, kwargs in ((ties.cell_basis, {}), (ties.facet_basis, {"facets": mesh.boundary_facets()[:40]})):
+        ours, theirs = make(mesh, element, intorder=INTORDER, **kwargs), make(mesh, element, mapping=plain,
+                                                                            intorder=INTORDER, **kwargs)
+        for i in (0, 40, 80):
+            assert np.array_equal(ours.basis[i][0].grad, theirs.basis[i][0].grad)
+        assert np.array_equal(ours.dx, theirs.dx)
+        if make is ties.facet_basis:
+            assert np.array_equal(np.asarray(ours.normals), np.asarray(theirs.normals))
+
+
+def test_a_run_without_fields_has_the_same_histories_and_no_mesh():
+    from reference_fem import solve
+
+    case = get_case("rod_impact", {"t_end": 2e-5})
+    with_mesh, without = solve(case), solve(case, fields=False)
+    assert with_mesh.mesh is not None and without.mesh is None
+    for name, values in with_mesh.history.items():
+        assert np.array_equal(values, without.history[name])
+
