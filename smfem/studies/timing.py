@@ -72,7 +72,11 @@ class TimingRule:
         keep their study shot: the cheap side of a ratio, which moved it by two, is timed). A
         retime has no study to pay for and times every run: a kept shot does not follow the host
         as the run's SMFEM side does (one stood still while the host slowed by a third)."""
-        return cls(budget_s=budget_s) if full or retime else cls(budget_s=budget_s, kept_s=10.0)
+        if full or retime:
+            return cls(budget_s=budget_s)
+        # nor does a quick one wait for a minimum to hold: on a shared host a third of its runs
+        # then went to nine repeats, and the pass to over eight minutes
+        return cls(budget_s=budget_s, kept_s=10.0, max_repeats=cls.repeats)
 
     def done(self, times: list[float], spent: float) -> bool:
         """Whether a run timed ``times`` (CPU s) needs no more repeats, ``spent`` CPU s into the pass."""
