@@ -46,7 +46,8 @@ def _timing(parser) -> None:
                              f"second repeat within {100 * rule.hold:g} %% of its minimum (tables/timing.csv); a run over {rule.long_s:g} s is timed once, and once more while "
                              f"the pass stays within this many CPU s (default {BUDGET_S:g}); 0: never twice. The "
                              f"quick settings time only runs whose study shot took at most "
-                             f"{TimingRule.of(False).kept_s:g} s: a dearer run's shot stands (0 repeats; --retime times it)")
+                             f"{TimingRule.of(False).kept_s:g} s: a dearer run's shot stands (0 repeats; --retime times it), "
+                             f"and do not wait for the second repeat within {100 * rule.hold:g} %% of the minimum")
     parser.add_argument("--no-timing", action="store_true",
                         help="no timing pass: the headline keeps the study's single-shot CPU times")
 
