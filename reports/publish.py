@@ -19,6 +19,8 @@ import pandas as pd
 
 from smfem.runs.figures import save, subplots
 from smfem.runs.registry import REF3D, lookup
+from smfem.studies import provenance
+from smfem.studies.cache import made_of
 
 from .figures import _log_axes
 from .verdict import names_an_engine, summary_table, verdict
@@ -42,6 +44,18 @@ def _memory_gb() -> float | None:
         return None
 
 
+def made_here(study) -> tuple[int, int]:
+    """``(runs, of them made from these sources)``: the distinct stored runs ``study`` read (series,
+    same-dt references, fields, truth runs, error estimates), and how many of them record a commit
+    whose sources are this checkout's (:func:`smfem.studies.provenance.same_sources`)."""
+    runs = {}
+    for case in study.cases:
+        for run in [*case.all_runs(), case.fields, *(run for run, _ in case.estimates.values())]:
+            if run is not None and run.path is not None:
+                runs[run.path] = run
+    return len(runs), sum(provenance.same_sources(made_of(run).get("commit")) for run in runs.values())
+
+
 def publish(report, directory: Path, settings: str, workers: int, scheduler: str | None) -> dict:
     """Copy the report's :data:`PUBLISHED` tables into ``directory/tables`` and write
     ``directory/run.json``; returns what run.json says."""
@@ -52,6 +66,7 @@ def publish(report, directory: Path, settings: str, workers: int, scheduler: str
     runs = report.tables["runs"]
     memory = pd.to_numeric(runs.get("peak_memory_mb", pd.Series(dtype=float)), errors="coerce")
     largest = runs.loc[memory.idxmax()] if memory.notna().any() else None
+    stored, from_here = made_here(report.study)
     made = {
         "command": "smfem report" + (" --full" if settings == "full" else "")
                    + (f" --scheduler {scheduler}" if scheduler else f" --workers {workers}"),
@@ -59,6 +74,11 @@ def publish(report, directory: Path, settings: str, workers: int, scheduler: str
         "wall_time_s": round(report.wall_time_s, 1),
         "runs_executed": len(report.study.executed),
         "runs_cached": report.study.cached,
+        # a report made from nothing at a commit has every run made from its sources, by this pass
+        # or by an earlier one into the same new cache (smfem.studies.provenance)
+        "commit": provenance.commit(),
+        "runs_stored": stored,
+        "runs_made_from_these_sources": from_here,
         "cpu_time_s_of_runs": round(float(pd.to_numeric(runs.cpu_time_s, errors="coerce").sum()), 1),
         "peak_memory_mb": None if largest is None else round(float(largest.peak_memory_mb), 1),
         "peak_memory_run": None if largest is None else f"{largest.case} {largest.solver} {largest.level}",
@@ -106,6 +126,15 @@ def front_figure(fronts: pd.DataFrame, path: Path, scenes=FIGURE_SCENES) -> Path
     return save(fig, path)
 
 
+def _provenance(made: dict) -> str:
+    """Which commit made the report's runs, from run.json (one written before it said: nothing)."""
+    if made.get("commit") is None:
+        return "no commit recorded"
+    commit = made["commit"][:12] + ("" if "+" not in made["commit"] else " with changes")
+    return (f"{made.get('runs_made_from_these_sources', 0)} of its {made.get('runs_stored', 0)} stored runs made from "
+            f"the sources of commit {commit}")
+
+
 def _markdown(table: pd.DataFrame) -> str:
     cells = table.astype(object).where(table.notna(), "").astype(str)
     lines = ["| " + " | ".join(cells.columns) + " |", "|" + "---|" * len(cells.columns)]
@@ -123,7 +152,8 @@ def page(directory: Path) -> Path:
     machine = made["machine"]
     text = [f"# {'The full report' if '--full' in made['command'] else 'The report'}'s findings", "",
             f"Written by `{made['command']} --publish {directory.as_posix()}` on {made['finished']}: "
-            f"{made['runs_executed']} runs executed, {made['runs_cached']} from the run cache, "
+            f"{made['runs_executed']} runs executed, {made['runs_cached']} from the run cache; "
+            f"{_provenance(made)}; "
             f"{made['wall_time_s']:.0f} s wall on {machine['cpus']} cores ({machine['cpu']}, "
             f"{machine['memory_gb']:.0f} GB); {made['cpu_time_s_of_runs']:.0f} CPU s in the runs, the largest run "
             f"{made['peak_memory_mb']:.0f} MB ({made['peak_memory_run']}). Errors are total errors (space, harmonics "

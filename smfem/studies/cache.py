@@ -30,6 +30,7 @@ from smfem.runs.files import read_run
 from smfem.runs.registry import lookup
 
 from .jobs import FAILED, NOT_INSTALLED, Job, Outcome
+from . import provenance
 
 #: packages whose source decides every solver's results (each adds its own, :mod:`smfem.runs.registry`)
 SHARED_SOURCES = ("cases", "smfem.runs")
@@ -205,12 +206,23 @@ class RunCache:
             (tmp / name).write_bytes(data)
         record = {"key": key_of(job), "overrides": dict(job.overrides), "status": outcome.status,
                   "message": outcome.message,
-                  "files": {name: _sha256(data) for name, data in sorted((outcome.files or {}).items())}}
+                  "files": {name: _sha256(data) for name, data in sorted((outcome.files or {}).items())},
+                  "made": provenance.made()}
         (tmp / "job.json").write_text(json.dumps(record, indent=2, default=str))
         if path.exists():
             shutil.rmtree(path)
         os.replace(tmp, path)
         return _read(job, outcome.status, outcome.message, path)
+
+
+
+def made_of(run: Run) -> dict:
+    """What ``run``'s entry records of its making (:func:`smfem.studies.provenance.made`; empty
+    for a run not stored, or stored before it was recorded)."""
+    try:
+        return json.loads((run.path / "job.json").read_text()).get("made") or {}
+    except (OSError, ValueError, TypeError, AttributeError):
+        return {}
 
 
 def _checked(path: Path) -> tuple[dict | None, str]:

@@ -1,0 +1,37 @@
+"""Which sources made a run (smfem.studies.provenance): what run.json counts as made from nothing."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import pytest
+
+from smfem.studies import provenance
+
+needs_git = pytest.mark.skipif(shutil.which("git") is None or not (provenance.ROOT / ".git").exists(),
+                               reason="not a git checkout (an installed package records no commit)")
+
+
+def git(*args) -> str:
+    return subprocess.run(["git", "-C", str(provenance.ROOT), *args], capture_output=True, text=True,
+                          check=True).stdout.strip()
+
+
+def test_a_run_of_no_commit_or_of_uncommitted_changes_is_never_from_these_sources():
+    assert not provenance.same_sources(None)
+    assert not provenance.same_sources("")
+    assert not provenance.same_sources("0" * 40 + "+changes")
+    assert not provenance.same_sources("0" * 40)  # a commit this checkout does not know
+
+
+@needs_git
+def test_head_made_these_sources_unless_they_changed_and_the_first_commit_did_not():
+    head = git("rev-parse", "HEAD")
+    assert provenance.commit().startswith(head)
+    changed = git("status", "--porcelain", "--untracked-files=no", "--", *provenance.SOURCES) != ""
+    assert provenance.same_sources(head) is not changed
+    first = git("rev-list", "--max-parents=0", "HEAD").split()[0]
+    assert provenance.same_sources(first) is (first == head and not changed)  # (a clone of depth one)
+    made = provenance.made()
+    assert made["commit"] == provenance.commit() and made["at"]
