@@ -127,11 +127,14 @@ def front_figure(fronts: pd.DataFrame, path: Path, scenes=FIGURE_SCENES) -> Path
 
 
 def _provenance(made: dict) -> str:
-    """Which commit made the report's runs, from run.json (one written before it said: nothing)."""
-    if made.get("commit") is None:
-        return "no commit recorded"
+    """``'; N of its M stored runs made from the sources of commit C'``, from run.json ('' for one
+    written before it said)."""
+    if "commit" not in made:
+        return ""
+    if made["commit"] is None:
+        return "; no commit recorded"
     commit = made["commit"][:12] + ("" if "+" not in made["commit"] else " with changes")
-    return (f"{made.get('runs_made_from_these_sources', 0)} of its {made.get('runs_stored', 0)} stored runs made from "
+    return (f"; {made.get('runs_made_from_these_sources', 0)} of its {made.get('runs_stored', 0)} stored runs made from "
             f"the sources of commit {commit}")
 
 
@@ -152,8 +155,8 @@ def page(directory: Path) -> Path:
     machine = made["machine"]
     text = [f"# {'The full report' if '--full' in made['command'] else 'The report'}'s findings", "",
             f"Written by `{made['command']} --publish {directory.as_posix()}` on {made['finished']}: "
-            f"{made['runs_executed']} runs executed, {made['runs_cached']} from the run cache; "
-            f"{_provenance(made)}; "
+            f"{made['runs_executed']} runs executed, {made['runs_cached']} from the run cache"
+            f"{_provenance(made)}, "
             f"{made['wall_time_s']:.0f} s wall on {machine['cpus']} cores ({machine['cpu']}, "
             f"{machine['memory_gb']:.0f} GB); {made['cpu_time_s_of_runs']:.0f} CPU s in the runs, the largest run "
             f"{made['peak_memory_mb']:.0f} MB ({made['peak_memory_run']}). Errors are total errors (space, harmonics "
