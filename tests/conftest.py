@@ -79,6 +79,7 @@ def tiny(tmp_path_factory):
     timing pass and document included, built once per worker for the report's and the timing
     pass's tests."""
     from reports.build import build
-    from test_report import TINY
+    from test_report import LIGHT_TIMING, TINY
 
-    return build(TINY, tmp_path_factory.mktemp("report"), workers=2, progress=False, settings="tiny")
+    return build(TINY, tmp_path_factory.mktemp("report"), workers=2, progress=False, settings="tiny",
+                 timing=LIGHT_TIMING)

@@ -24,6 +24,8 @@ from smfem.studies.own_scene import study_of
 from smfem.studies.plan import EXPLICIT_TRUTH, REF2D, REF3D, SMFEM, SMFEM_QUAD9, Series
 from smfem.studies.study import run_study
 
+from test_report import LIGHT_TIMING
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 #: the pipe's first 25 steps: seconds for the whole study
 SHORT = {"t_end": 5e-5}
@@ -40,7 +42,7 @@ def test_a_scene_file_is_studied_with_every_solver_against_a_truth_made_for_it(p
     assert study.truth.method == EXPLICIT_TRUTH and study.truth.refine == (1, 2, 4)  # elastic-plastic: not modal
     assert [s.solver for s in study.series] == [SMFEM, SMFEM_QUAD9, REF2D, REF3D]
     study = replace(study, series=study.series[:3])  # the 3D run: two thirds of the study's CPU time
-    report = build((study,), tmp_path / "study", progress=False, document=False)
+    report = build((study,), tmp_path / "study", progress=False, document=False, timing=LIGHT_TIMING)
     head = pd.read_csv(tmp_path / "study" / "tables" / "headline.csv")
     assert set(head.case) == {"pipe"} and set(head.solver) == {SMFEM, SMFEM_QUAD9, REF2D}
     assert head.truth.str.startswith("reference-explicit").all() and (head.truth_uncertainty_pct > 0).all()
