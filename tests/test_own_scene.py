@@ -20,9 +20,11 @@ from reports.scene import scene
 from reports.sections import ReportContext
 from smfem.cli import main
 from smfem.studies.cache import RunCache
-from smfem.studies.own_scene import study_of
+from smfem.runs.registry import CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, REF3D_EXPLICIT
+from smfem.studies.jobs import NOT_AVAILABLE, execute
+from smfem.studies.own_scene import FULL_MODES, study_of
 from smfem.studies.plan import EXPLICIT_TRUTH, REF2D, REF3D, SMFEM, SMFEM_QUAD9, Series
-from smfem.studies.study import run_study
+from smfem.studies.study import job_of, run_study
 
 from test_report import LIGHT_TIMING
 
@@ -101,3 +103,19 @@ def test_a_scenes_study_starts_from_its_own_mesh_and_keeps_3d_runs_few():
     wheel = study_of(str(EXAMPLES / "flywheel.toml"))
     assert [s.solver for s in wheel.series] == [SMFEM, SMFEM_QUAD9, REF3D]
     assert wheel.reference == (REF3D, {"refine": 1}) and wheel.estimated == (SMFEM,)
+
+
+def test_a_scenes_full_study_has_every_competitor_at_its_fastest():
+    """The full study of a scene file runs, as the built-in scenes' does, the 3D reference's
+    explicit engine (the scene's mesh and twice it) and CalculiX's three procedures; where the
+    scene is elasto-plastic the modal one is refused before any work, in one line the report keeps."""
+    full = study_of(str(EXAMPLES / "pipe.toml"), full=True)
+    assert [s.solver for s in full.series] == [SMFEM, SMFEM_QUAD9, REF2D, REF3D, REF3D_EXPLICIT, CALCULIX,
+                                               CALCULIX_EXPLICIT, CALCULIX_MODAL]
+    by_solver = {s.solver: s for s in full.series}
+    assert [level["refine"] for level in by_solver[REF3D_EXPLICIT].levels] == [1, 2]
+    assert [level["modes"] for level in by_solver[CALCULIX_MODAL].levels] == list(FULL_MODES)
+    assert [s.solver for s in study_of(str(EXAMPLES / "pipe.toml")).series] == [SMFEM, SMFEM_QUAD9, REF2D, REF3D]
+    plastic = study_of(str(EXAMPLES / "pipe.toml"), full=True, base={"plastic": True})
+    refused = execute(job_of(plastic)(CALCULIX_MODAL, {"modes": FULL_MODES[0]}))
+    assert refused.status == NOT_AVAILABLE and "plasticity" in refused.message and "\n" not in refused.message

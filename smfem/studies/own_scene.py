@@ -5,7 +5,8 @@ Its series span the scene's own settings as the built-in scenes' do (:mod:`smfem
 SMFEM at the scene's mesh and twice it (full: four times; harmonics with the mesh, for a scene
 that has more than one), each at the scene's step, half and a quarter of it (full: an eighth);
 the quadratic element; the reference FEM that can run the scene (2D where it has a 2D form,
-else 3D) and, beside a 2D one, the 3D reference at the scene's mesh. Its truth is made as a
+else 3D) and, beside a 2D one, the 3D reference at the scene's mesh; in the full study also the
+3D reference's explicit engine and CalculiX's three procedures (:data:`FULL_MODES`). Its truth is made as a
 built-in scene's would be were it new (:func:`smfem.studies.truth.plan_for`: modal where the
 scene is linear and homogeneous along x3, else the explicit reference over three meshes, else
 time-step halving). Every level runs, in the full study too: a series is carried along its
@@ -22,7 +23,8 @@ from pathlib import Path
 
 from cases import get_case
 
-from .plan import CALCULIX, REF2D, REF3D, SMFEM, SMFEM_QUAD9, CaseStudy, Series, grid
+from .plan import (CALCULIX, CALCULIX_EXPLICIT, CALCULIX_MODAL, REF2D, REF3D, REF3D_EXPLICIT, SMFEM, SMFEM_QUAD9, CaseStudy,
+                   Series, grid)
 from .plan import select as select_builtin
 from .truth import plan_for, reference_solver
 
@@ -30,6 +32,9 @@ from .truth import plan_for, reference_solver
 QUICK_SCALES, FULL_SCALES = (1, 2), (1, 2, 4)
 #: the scene's step over these
 QUICK_DIVISORS, FULL_DIVISORS = (1, 2, 4), (1, 2, 4, 8)
+#: CalculiX's modal procedure in a full study: the scene's mesh with these many modes (its
+#: truncation measured as the built-in scenes' is, :data:`smfem.studies.plan.CCX_MODAL`)
+FULL_MODES = (50, 100, 200)
 
 
 def is_scene_file(name) -> bool:
@@ -68,7 +73,11 @@ def study_of(name: str, full: bool = False, base: dict | None = None) -> CaseStu
         meshes = scales[:2] if full else scales[:1]
         series += [Series(REF3D, at(meshes, (1, 2) if full else (1,)))]
     if full:
-        series.append(Series(CALCULIX, ({},)))
+        # every competitor at its fastest, as on the built-in scenes: the 3D reference's explicit
+        # engine (its own Courant step) at the 3D meshes, CalculiX's three procedures at the scene's
+        # mesh; a procedure the scene cannot take is one run, refused in one line the report keeps
+        series += [Series(REF3D_EXPLICIT, spaces(scales[:2], False)), Series(CALCULIX, ({},)),
+                   Series(CALCULIX_EXPLICIT, ({},)), Series(CALCULIX_MODAL, tuple({"modes": m} for m in FULL_MODES))]
     # the same-dt reference: the finest reference mesh of the series; error estimates of SMFEM
     # and of a 2D reference (a 3D run's companions are 3D runs too, dear)
     return CaseStudy(ref, tuple(series), reference=(reference, spaces(meshes[-1:], False)[0]),
