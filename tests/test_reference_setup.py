@@ -15,16 +15,17 @@ from skfem.helpers import dot
 from skfem.mapping import MappingIsoparametric
 
 from cases import get_case
-from reference_fem import ties
+from reference_fem import forms, ties
 from reference_fem.linalg import factorize, solve_mass
 from reference_fem.mass import consistent_mass
 from reference_fem.mesh import INVF_TOL
 from reference_fem.model import AXISYMMETRIC, INTORDER, Model
 from reference_fem.probes import value_probes
 
-#: small models of each representation: axisymmetric, 3D solid, 3D with the axis tied, B-bar
+#: small models of each representation: axisymmetric, 3D solid, B-bar, two materials (D per element)
 MODELS = {"dome 2D": ("dome", {}, False), "thick cylinder 3D": ("thick_cylinder", {"dim": 3}, False),
-          "notched cylinder B-bar": ("notched_cylinder", {}, True)}
+          "notched cylinder B-bar": ("notched_cylinder", {}, True),
+          "layered cylinder 3D": ("layered_cylinder", {"dim": 3}, False)}
 
 
 @pytest.fixture(scope="module", params=list(MODELS))
@@ -60,6 +61,15 @@ def test_a_points_strain_rows_are_the_strain_operators(model):
     nc = rows[0].shape[0]
     for q, r in zip(points, rows):
         assert np.array_equal(r, model.B[q * nc:(q + 1) * nc].toarray())
+
+
+def test_the_stiffness_by_node_pairs_equals_the_strain_operators_product(model):
+    """``K`` from the gradients' products per pair of nodes (B-bar: the strains') equals
+    ``B^T diag(w D) B`` of the strain operator, to round-off, and holds no exact zero."""
+    K = model.stiffness()
+    expected = model.B.T @ (forms.material_blocks(model.D, model.stiffness_weights()) @ model.B)
+    assert abs(K - expected).max() <= 1e-14 * abs(expected).max()
+    assert K.nnz == np.count_nonzero(K.data) and K.has_canonical_format
 
 
 def test_a_faces_row_of_k_from_its_elements_equals_k(model):
