@@ -10,6 +10,7 @@ from functools import partial
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from skfem import BilinearForm, asm
 from skfem.helpers import dot
 from skfem.mapping import MappingIsoparametric
@@ -17,7 +18,7 @@ from skfem.mapping import MappingIsoparametric
 from cases import get_case
 from reference_fem import forms, ties
 from reference_fem.linalg import factorize, solve_mass
-from reference_fem.mass import consistent_mass
+from reference_fem.mass import component_copies, consistent_mass
 from reference_fem.mesh import INVF_TOL
 from reference_fem.model import AXISYMMETRIC, INTORDER, Model
 from reference_fem.probes import value_probes
@@ -51,6 +52,15 @@ def test_the_mass_element_by_element_equals_the_vector_form(model):
     expected = asm(_vector_mass, basis, rho=model.case.material.rho, weight=radius)
     M = consistent_mass(basis, model.case.material.rho, model.rep == AXISYMMETRIC)
     assert abs(M - expected).max() <= 1e-14 * abs(expected).max()
+
+
+def test_component_copies_are_the_kronecker_product():
+    M = sp.random(40, 40, density=0.1, random_state=2, format="lil")
+    M[5, :] = 0.0  # an empty row
+    M = M.tocsr()
+    for dim in (2, 3):
+        copies, expected = component_copies(M, dim), sp.kron(M, sp.identity(dim), format="csr")
+        assert copies.has_canonical_format and (copies != expected).nnz == 0 and copies.nnz == expected.nnz
 
 
 def test_a_points_strain_rows_are_the_strain_operators(model):
