@@ -11,7 +11,7 @@ from functools import partial
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from skfem import BilinearForm, asm
+from skfem import BilinearForm, ElementVector, asm
 from skfem.helpers import dot
 from skfem.mapping import MappingIsoparametric
 
@@ -102,17 +102,19 @@ def test_a_probe_at_a_node_reads_the_node_as_the_element_map_does(model):
 
 def test_the_kept_inverse_map_gives_the_bases_scikit_fem_gives():
     """A cell and a facet basis on the reference's mapping, which keeps the inverse Jacobian,
-    the inverse map and the shape functions of the points last asked for, equal those on
-    scikit-fem's own (its map, Jacobian and Newton iteration, at the reference's tolerance)."""
+    the inverse map and the shape functions of the points last asked for, and of its vector
+    element, which keeps its scalar function for the components, equal those on scikit-fem's own
+    (its map, Jacobian and Newton iteration, at the reference's tolerance; ``ElementVector``)."""
     model = Model(get_case("thick_cylinder", {"dim": 3}))
     mesh, element = model.rmesh.mesh, model.element
     plain = MappingIsoparametric(mesh, mesh.elem(), mesh.bndelem)
     plain.invF = partial(MappingIsoparametric.invF, plain, newton_tol=INVF_TOL)
     for make, kwargs in ((ties.cell_basis, {}), (ties.facet_basis, {"facets": mesh.boundary_facets()[:40]})):
-        ours, theirs = make(mesh, element, intorder=INTORDER, **kwargs), make(mesh, element, mapping=plain,
-                                                                            intorder=INTORDER, **kwargs)
-        for i in (0, 40, 80):
+        ours = make(mesh, element, intorder=INTORDER, **kwargs)
+        theirs = make(mesh, ElementVector(element.elem), mapping=plain, intorder=INTORDER, **kwargs)
+        for i in (0, 40, 41, 42, 80):
             assert np.array_equal(ours.basis[i][0].grad, theirs.basis[i][0].grad)
+            assert np.array_equal(np.asarray(ours.basis[i][0]), np.asarray(theirs.basis[i][0]))
         assert np.array_equal(ours.dx, theirs.dx)
         if make is ties.facet_basis:
             assert np.array_equal(np.asarray(ours.normals), np.asarray(theirs.normals))
