@@ -16,7 +16,7 @@ from skfem.element import DiscreteField
 
 
 class VectorElement(ElementVector):
-    """``ElementVector(elem)`` that evaluates ``elem``'s function once for its ``dim`` components."""
+    """``ElementVector(elem)`` evaluating ``elem``'s function once for its ``dim`` components."""
 
     _last = None
 
@@ -24,7 +24,8 @@ class VectorElement(ElementVector):
         j, component = divmod(i, self.dim)
         last = self._last
         # the arguments are kept with the field, so their identities stand for their values
-        if last is None or last[0] is not mapping or last[1] is not X or last[2] is not tind or last[3] != j:
+        if (last is None or last[3] != j or last[0] is not mapping or last[1] is not X
+                or last[2] is not tind):
             last = self._last = (mapping, X, tind, j, self.elem.gbasis(mapping, X, j, tind)[0])
         fields = []
         for field in last[4].astuple:

@@ -26,9 +26,10 @@ def n_components(dim: int) -> int:
     return 4 if dim == 2 else 6
 
 
-#: elements whose dense strain blocks :func:`stiffness` and :func:`strain_operator` form at once
-#: (a 27-node element's are 105 kB: about a hundred MB of work arrays, whatever the mesh; 2000 at
-#: once ran slower on a first call, its half-GB of fresh pages)
+#: elements whose dense blocks :func:`stiffness` (gradients' or strains' products) and
+#: :func:`strain_operator` form at once (a 27-node element's strains are 105 kB: about a hundred
+#: MB of work arrays, whatever the mesh; 2000 at once ran slower on a first call, its half-GB of
+#: fresh pages)
 ELEMENT_CHUNK = 256
 
 
@@ -89,14 +90,16 @@ def scalar_gradients(basis, axisymmetric: bool, elements) -> np.ndarray:
     rows = [np.stack([f.grad[0][k][elements] for f in scalars], axis=-1) for k in range(dim)]
     if axisymmetric:
         radius = np.asarray(basis.global_coordinates())[0][elements]
-        rows.append(np.stack([np.asarray(f)[0][elements] for f in scalars], axis=-1) / radius[..., None])
+        values = np.stack([np.asarray(f)[0][elements] for f in scalars], axis=-1)
+        rows.append(values / radius[..., None])
     return np.stack(rows, axis=2)
 
 
 def strain_map(dim: int, axisymmetric: bool) -> np.ndarray:
     """``P`` ``(nc, dim, g)``: Mandel strain ``c`` of a displacement is ``P[c, a, k] E[a, k]``,
     ``E[a, k]`` entry ``k`` of :func:`scalar_gradients` of displacement component ``a`` (normal
-    ``a``; the shears pairing ``a`` with another direction, over sqrt 2; the hoop strain ``u_r / r``)."""
+    ``a``; the shears pairing ``a`` with another direction, over sqrt 2; the hoop strain
+    ``u_r / r``)."""
     nc = n_components(dim)
     P = np.zeros((nc, dim, dim + int(axisymmetric)))
     for k in range(dim):
@@ -172,10 +175,10 @@ def stiffness(basis, axisymmetric: bool, weights: np.ndarray, D: np.ndarray,
     nel, nqe = basis.dx.shape
     dim = basis.mesh.dim()
     pairs = NodePairs(basis)
-    by_element = per_element(D, nel, nqe) if projection is None else None
+    by_element = elastic_per_element(D, nel, nqe) if projection is None else None
     if by_element is not None:
         P = strain_map(dim, axisymmetric)
-        # C[k, l, a, b]: the stress pairing derivative k of component a with derivative l of b
+        # C[k, l, a, b]: the elasticity pairing derivative k of component a with derivative l of b
         C = np.einsum("cak,...cd,dbl->...klab", P, by_element, P)
         C = C.reshape(C.shape[:-4] + (-1, dim * dim))
     w = weights.reshape(nel, nqe)
@@ -185,7 +188,8 @@ def stiffness(basis, axisymmetric: bool, weights: np.ndarray, D: np.ndarray,
         if by_element is not None:
             G = scalar_gradients(basis, axisymmetric, chunk)  # (n, nqe, g, n_scalar)
             n, g, ns = G.shape[0], G.shape[2], G.shape[3]
-            S = G.transpose(0, 2, 3, 1).reshape(n, g * ns, nqe) @ (G * w[chunk, :, None, None]).reshape(n, nqe, -1)
+            weighted = (G * w[chunk, :, None, None]).reshape(n, nqe, g * ns)
+            S = G.transpose(0, 2, 3, 1).reshape(n, g * ns, nqe) @ weighted  # (n, (k, i), (l, j))
             S = S.reshape(n, g, ns, g, ns).transpose(0, 2, 4, 1, 3).reshape(n, ns * ns, g * g)
             blocks = S @ (C if C.ndim == 2 else C[chunk])  # (n, node pairs, dim * dim)
         else:
@@ -201,18 +205,20 @@ def _strain_blocks(basis, axisymmetric, w, D, projection, chunk) -> np.ndarray:
     dim = basis.mesh.dim()
     nc = D.shape[-1]
     points = np.arange(chunk.start * nqe, chunk.stop * nqe)
-    wD = (np.broadcast_to(at_points(D, points), (points.size, nc, nc)) * w.reshape(-1, 1, 1)).reshape(n, nqe, nc, nc)
+    wD = np.broadcast_to(at_points(D, points), (points.size, nc, nc)) * w.reshape(-1, 1, 1)
+    wD = wD.reshape(n, nqe, nc, nc)
     Be = element_strains(basis, axisymmetric, chunk)  # (n, nqe, nc, n_local)
     if projection is not None:
         theta = Be[:, :, :3].sum(axis=2)  # (n, nqe, n_local)
         Be[:, :, :3] += (projection[chunk] @ theta)[:, :, None] / 3.0
     n_local = Be.shape[-1]
-    Ke = Be.reshape(n, nqe * nc, n_local).transpose(0, 2, 1) @ (wD @ Be).reshape(n, nqe * nc, n_local)
+    rows = Be.reshape(n, nqe * nc, n_local)
+    Ke = rows.transpose(0, 2, 1) @ (wD @ Be).reshape(n, nqe * nc, n_local)
     ns = n_local // dim
     return Ke.reshape(n, ns, dim, ns, dim).transpose(0, 1, 3, 2, 4).reshape(n, ns * ns, dim * dim)
 
 
-def per_element(D: np.ndarray, nel: int, nqe: int) -> np.ndarray | None:
+def elastic_per_element(D: np.ndarray, nel: int, nqe: int) -> np.ndarray | None:
     """``D`` one matrix ``(nc, nc)`` as it is, one per point ``(n_qp, nc, nc)`` as one per element
     ``(nel, nc, nc)``, or None where it varies within an element."""
     if D.ndim == 2:
@@ -235,9 +241,10 @@ class NodePairs:
         self.dim = dim = basis.mesh.dim()
         self.n_nodes, self.N = basis.N // dim, basis.N
         nodes = (basis.element_dofs[::dim] // dim).T.astype(np.int64)  # (n_elements, n_scalar)
-        self.per_element = nodes.shape[1] ** 2
-        keys, block = np.unique((nodes[:, :, None] * self.n_nodes + nodes[:, None, :]).ravel(), return_inverse=True)
-        #: (n_blocks, n_elements * n_scalar^2): the block of each element's pair (one entry a column)
+        self.pairs_per_element = nodes.shape[1] ** 2
+        keys, block = np.unique((nodes[:, :, None] * self.n_nodes + nodes[:, None, :]).ravel(),
+                                return_inverse=True)
+        #: (n_blocks, n_elements * n_scalar^2): the block of each element's pair, one entry a column
         self.gather = sp.csc_matrix((np.ones(block.size), block.ravel(), np.arange(block.size + 1)),
                                     shape=(keys.size, block.size))
         rows = keys // self.n_nodes
@@ -248,8 +255,10 @@ class NodePairs:
         return np.zeros((self.indices.size, self.dim * self.dim))
 
     def add(self, data: np.ndarray, elements: slice, blocks: np.ndarray) -> None:
-        """Add the ``elements``' blocks ``(n, n_scalar^2, dim * dim)`` to ``data`` (:meth:`zeros`)."""
-        columns = slice(elements.start * self.per_element, elements.stop * self.per_element)
+        """Add the ``elements``' blocks ``(n, n_scalar^2, dim * dim)`` to ``data``
+        (:meth:`zeros`)."""
+        per = self.pairs_per_element
+        columns = slice(elements.start * per, elements.stop * per)
         data += self.gather[:, columns] @ blocks.reshape(-1, self.dim * self.dim)
 
     def matrix(self, data: np.ndarray) -> sp.csr_matrix:

@@ -53,11 +53,12 @@ def consistent_mass(basis, rho: float | np.ndarray, axisymmetric: bool, factor: 
     r = np.asarray(basis.global_coordinates())[0] if axisymmetric else 1.0
     w = density(basis, rho) * basis.dx * r * (1.0 if factor is None else factor)  # (n_elements, n_qp)
     phi = phi.transpose(1, 0, 2)  # (n_elements, n_local, n_qp)
-    Me = phi @ (phi * w[:, None, :]).transpose(0, 2, 1)  # one product per element, not a three-way einsum
+    Me = phi @ (phi * w[:, None, :]).transpose(0, 2, 1)  # a product per element, not a 3-way einsum
     rows = np.broadcast_to(dofs.T[:, :, None], Me.shape).ravel()
     cols = np.broadcast_to(dofs.T[:, None, :], Me.shape).ravel()
     n = basis.N // basis.mesh.dim()
-    return component_copies(sp.csr_matrix((Me.ravel(), (rows, cols)), shape=(n, n)), basis.mesh.dim())
+    M = sp.csr_matrix((Me.ravel(), (rows, cols)), shape=(n, n))
+    return component_copies(M, basis.mesh.dim())
 
 
 def component_copies(M: sp.csr_matrix, dim: int) -> sp.csr_matrix:

@@ -97,12 +97,14 @@ class _Mapping(MappingIsoparametric):
 
     def _local(self, element, X, n: int):
         """``element``'s first ``n`` shape functions and their gradients at the reference points
-        ``X`` (``lbasis(X, k)``'s two parts, lists over ``k``), kept for the points last asked for."""
+        ``X`` (``lbasis(X, k)``'s two parts, lists over ``k``), kept for the points last asked
+        for."""
         last = getattr(self, "_last_local", None)
         if last is None or last[0] is not element or last[1] is not X or last[2] != n:
             # the points are kept with them, so their identity stands for their values
             values = [element.lbasis(X, k) for k in range(n)]
-            last = self._last_local = (element, X, n, [v[0] for v in values], [v[1] for v in values])
+            last = (element, X, n, [v[0] for v in values], [v[1] for v in values])
+            self._last_local = last
         return last[3], last[4]
 
     def _sum(self, nodes, element, X, i, j=None):

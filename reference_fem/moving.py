@@ -59,7 +59,8 @@ class MovingPressure:
     def _basis(self, facets, quadrature) -> FacetBasis:
         """The scalar element's facet basis (the vector function ``dim j + a`` is its function
         ``j`` along component ``a``: a third of the functions to evaluate in 3D)."""
-        return ties.facet_basis(self.model.rmesh.mesh, self.model.element.elem, facets=facets, quadrature=quadrature)
+        return ties.facet_basis(self.model.rmesh.mesh, self.model.element.elem, facets=facets,
+                                quadrature=quadrature)
 
     def _x3_along_facets(self):
         """Per facet: x3 at its reference origin, its change along the reference coordinate it
@@ -103,10 +104,10 @@ class MovingPressure:
         for along in np.unique(self.along):
             mine = np.flatnonzero(self.along == along)
             fb = self._basis(self.facets[mine], self._rule(int(along), 0.5 * (x + 1)))
-            phi = np.stack([np.asarray(fb.basis[j][0]) for j in range(fb.Nbfun)], axis=1)  # (facets, n_scalar, points)
-            n_dx = np.asarray(fb.normals) * fb.dx  # (dim, facets, points)
+            phi = np.stack([np.asarray(fb.basis[j][0]) for j in range(fb.Nbfun)], axis=1)  # (f, scalar, q)
+            n_dx = np.asarray(fb.normals).transpose(1, 0, 2) * fb.dx[:, None]  # (f, dim, q)
             # vector function dim j + a: -phi_j n_a dS
-            per_point = -(phi[:, :, None] * n_dx.transpose(1, 0, 2)[:, None]).reshape(mine.size, n_local, -1)
+            per_point = -(phi[:, :, None] * n_dx[:, None]).reshape(mine.size, n_local, -1)
             values = per_point.reshape(per_point.shape[:2] + (ALONG, -1)).sum(axis=-1)  # across summed
             coefficients = values @ inverse.T
             dofs[:, mine] = (dim * fb.element_dofs[:, None] + np.arange(dim)[:, None]).reshape(n_local, -1)
