@@ -5,8 +5,10 @@ they replaced.
 
 Per model (scene, dim, refine; B-bar on the notched scenes, as the reports run them), CPU
 seconds (one thread) of: the mass element by element from the scalar element's functions (read
-off the vector basis), one copy per component, against skfem's vector form ``rho u . v``; the stiffness element by element against the sparse product
-``B' (w D B)``; each pair's largest difference relative to the largest entry.
+off the vector basis), one copy per component, against skfem's vector form ``rho u . v``; the
+stiffness per pair of nodes (:func:`reference_fem.forms.stiffness`: the scalar gradients'
+products, B-bar's the strains') against the sparse product ``B' (w D B)``; each pair's largest
+difference relative to the largest entry.
 """
 
 from __future__ import annotations

@@ -26,9 +26,10 @@ def n_components(dim: int) -> int:
     return 4 if dim == 2 else 6
 
 
-#: elements whose dense strain blocks :func:`stiffness` and :func:`strain_operator` form at once
-#: (a 27-node element's are 105 kB: about a hundred MB of work arrays, whatever the mesh; 2000 at
-#: once ran slower on a first call, its half-GB of fresh pages)
+#: elements whose dense blocks :func:`stiffness` (gradients' or strains' products) and
+#: :func:`strain_operator` form at once (a 27-node element's strains are 105 kB: about a hundred
+#: MB of work arrays, whatever the mesh; 2000 at once ran slower on a first call, its half-GB of
+#: fresh pages)
 ELEMENT_CHUNK = 256
 
 
@@ -79,24 +80,48 @@ def quadrature_weights(basis, axisymmetric: bool) -> np.ndarray:
 SHEAR = {2: ((0, 1),), 3: ((1, 2), (0, 2), (0, 1))}
 
 
+def scalar_gradients(basis, axisymmetric: bool, elements) -> np.ndarray:
+    """The scalar element's gradients at the quadrature points of ``elements``, ``(n_elements,
+    n_qp, g, n_scalar)``: ``g = dim`` derivatives, axisymmetric also the value over ``r`` (the
+    hoop strain of a radial function), read off the vector basis (its function ``dim j`` is the
+    scalar function ``j`` along component 0)."""
+    dim = basis.mesh.dim()
+    scalars = [basis.basis[dim * j][0] for j in range(basis.Nbfun // dim)]
+    rows = [np.stack([f.grad[0][k][elements] for f in scalars], axis=-1) for k in range(dim)]
+    if axisymmetric:
+        radius = np.asarray(basis.global_coordinates())[0][elements]
+        values = np.stack([np.asarray(f)[0][elements] for f in scalars], axis=-1)
+        rows.append(values / radius[..., None])
+    return np.stack(rows, axis=2)
+
+
+def strain_map(dim: int, axisymmetric: bool) -> np.ndarray:
+    """``P`` ``(nc, dim, g)``: Mandel strain ``c`` of a displacement is ``P[c, a, k] E[a, k]``,
+    ``E[a, k]`` entry ``k`` of :func:`scalar_gradients` of displacement component ``a`` (normal
+    ``a``; the shears pairing ``a`` with another direction, over sqrt 2; the hoop strain
+    ``u_r / r``)."""
+    nc = n_components(dim)
+    P = np.zeros((nc, dim, dim + int(axisymmetric)))
+    for k in range(dim):
+        P[k, k, k] = 1.0
+    for c, (k, l) in enumerate(SHEAR[dim], start=nc - len(SHEAR[dim])):
+        P[c, k, l] = P[c, l, k] = 1.0 / SQRT2
+    if axisymmetric:
+        P[2, 0, dim] = 1.0
+    return P
+
+
 def element_strains(basis, axisymmetric: bool, elements) -> np.ndarray:
     """Mandel strains of every vector function of ``basis`` at the quadrature points of
     ``elements``, ``(n_elements, n_qp, nc, n_local)``: the vector function ``dim j + a`` is the
-    scalar function ``j`` along component ``a``, so its strains are the scalar gradient's
-    entries placed (normal ``a``; the shears that pair ``a`` with another direction, over sqrt 2;
-    axisymmetric: the hoop strain ``phi / r`` of the radial ones)."""
+    scalar function ``j`` along component ``a``, so its strains are :func:`strain_map`'s of the
+    scalar's :func:`scalar_gradients` placed in component ``a``."""
     dim = basis.mesh.dim()
-    scalars = [basis.basis[dim * j][0] for j in range(basis.Nbfun // dim)]  # along component 0
-    G = np.stack([f.grad[0][:, elements] for f in scalars], axis=-1)  # (dim, n, nqe, n_scalar)
-    Be = np.zeros(G.shape[1:3] + (n_components(dim), G.shape[3], dim))
-    for k in range(dim):
-        Be[:, :, k, :, k] = G[k]
-    for c, (k, l) in enumerate(SHEAR[dim], start=n_components(dim) - len(SHEAR[dim])):
-        Be[:, :, c, :, k] = G[l] / SQRT2
-        Be[:, :, c, :, l] = G[k] / SQRT2
-    if axisymmetric:
-        radius = np.asarray(basis.global_coordinates())[0][elements]
-        Be[:, :, 2, :, 0] = np.stack([np.asarray(f)[0][elements] for f in scalars], axis=-1) / radius[..., None]
+    G = scalar_gradients(basis, axisymmetric, elements)  # (n, nqe, g, n_scalar)
+    P = strain_map(dim, axisymmetric)
+    Be = np.zeros(G.shape[:2] + (P.shape[0], G.shape[3], dim))
+    for c, a, k in zip(*np.nonzero(P)):  # a few entries: no product over the zeros
+        Be[:, :, c, :, a] += P[c, a, k] * G[:, :, k]
     return Be.reshape(Be.shape[:3] + (-1,))
 
 
@@ -134,40 +159,114 @@ def material_blocks(D: np.ndarray, weights: np.ndarray) -> sp.bsr_matrix:
 
 def stiffness(basis, axisymmetric: bool, weights: np.ndarray, D: np.ndarray,
               projection: np.ndarray | None = None) -> sp.csr_matrix:
-    """``K = B^T diag(w D) B`` (N/m, or N/m per radian when axisymmetric), element by element.
+    """``K = B^T diag(w D) B`` (N/m, or N/m per radian when axisymmetric), element by element,
+    as blocks of node pairs (:class:`NodePairs`); entries that cancel exactly are dropped.
 
-    Each element's ``B_e^T (w D) B_e`` is one dense product over its quadrature points, ``B_e``
-    the element's strains of :func:`strain_operator` (with the B-bar ``projection`` of
-    :func:`volumetric_projection`, as :func:`bbar_operator` applies it); summed into K once
-    (the 3D thick cylinder at refine 2: 1.6 CPU s against 3.8 s for the sparse product
-    ``B^T (w D B)``, equal to 7e-16 of its largest entry: benchmarks/reference_setup.py).
-    Entries that cancel exactly are dropped.
+    Where ``D`` is one per element (one material, or regions) each element's blocks are
+    ``sum_q w_q G_q^T C G_q`` of its scalar functions' gradients ``G`` (:func:`scalar_gradients`)
+    and the elasticity ``C = P^T D P`` (:func:`strain_map`): one product of the gradients over
+    the element's points per pair of derivatives (27 x 27 x 9 in 3D), then ``C`` on each pair of
+    nodes, where the strains' product ``B_e^T (w D) B_e`` (81 x 81 over 162 rows) spends six
+    times the flops on the strains' zeros. With the B-bar ``projection`` of
+    :func:`volumetric_projection` (which couples an element's points) or a ``D`` that varies
+    within an element, the strains' product (:func:`element_strains`, as :func:`bbar_operator`
+    projects them).
     """
     nel, nqe = basis.dx.shape
-    nc = D.shape[-1]
-    wD = (np.broadcast_to(D, (weights.size, nc, nc)) * weights[:, None, None]).reshape(nel, nqe, nc, nc)
-    parts = []  # each chunk's sum (its duplicates summed: a few times fewer entries than its blocks)
+    dim = basis.mesh.dim()
+    pairs = NodePairs(basis)
+    by_element = elastic_per_element(D, nel, nqe) if projection is None else None
+    if by_element is not None:
+        P = strain_map(dim, axisymmetric)
+        # C[k, l, a, b]: the elasticity pairing derivative k of component a with derivative l of b
+        C = np.einsum("cak,...cd,dbl->...klab", P, by_element, P)
+        C = C.reshape(C.shape[:-4] + (-1, dim * dim))
+    w = weights.reshape(nel, nqe)
+    data = pairs.zeros()
     for start in range(0, nel, ELEMENT_CHUNK):
         chunk = slice(start, min(start + ELEMENT_CHUNK, nel))
-        Be = element_strains(basis, axisymmetric, chunk)  # (n, nqe, nc, n_local)
-        if projection is not None:
-            theta = Be[:, :, :3].sum(axis=2)  # (n, nqe, n_local)
-            Be[:, :, :3] += (projection[chunk] @ theta)[:, :, None] / 3.0
-        n, n_local = Be.shape[0], Be.shape[-1]
-        Ke = Be.reshape(n, nqe * nc, n_local).transpose(0, 2, 1) @ (wD[chunk] @ Be).reshape(n, nqe * nc, n_local)
-        dofs = basis.element_dofs[:, chunk].T
-        rows = np.broadcast_to(dofs[:, :, None], Ke.shape).ravel()
-        cols = np.broadcast_to(dofs[:, None, :], Ke.shape).ravel()
-        parts.append(sp.coo_matrix((Ke.ravel(), (rows, cols)), shape=(basis.N, basis.N)).tocsr())
-    if len(parts) > 1:
-        parts = [part.tocoo() for part in parts]
-        K = sp.csr_matrix((np.concatenate([c.data for c in parts]), (np.concatenate([c.row for c in parts]),
-                                                                      np.concatenate([c.col for c in parts]))),
-                          shape=(basis.N, basis.N))
-    else:
-        K = parts[0]
-    K.eliminate_zeros()
-    return K
+        if by_element is not None:
+            G = scalar_gradients(basis, axisymmetric, chunk)  # (n, nqe, g, n_scalar)
+            n, g, ns = G.shape[0], G.shape[2], G.shape[3]
+            weighted = (G * w[chunk, :, None, None]).reshape(n, nqe, g * ns)
+            S = G.transpose(0, 2, 3, 1).reshape(n, g * ns, nqe) @ weighted  # (n, (k, i), (l, j))
+            S = S.reshape(n, g, ns, g, ns).transpose(0, 2, 4, 1, 3).reshape(n, ns * ns, g * g)
+            blocks = S @ (C if C.ndim == 2 else C[chunk])  # (n, node pairs, dim * dim)
+        else:
+            blocks = _strain_blocks(basis, axisymmetric, w[chunk], D, projection, chunk)
+        pairs.add(data, chunk, blocks)
+    return pairs.matrix(data)
+
+
+def _strain_blocks(basis, axisymmetric, w, D, projection, chunk) -> np.ndarray:
+    """The blocks of :func:`stiffness` of the elements ``chunk`` by the strains' product,
+    ``(n, node pairs, dim * dim)``."""
+    n, nqe = w.shape
+    dim = basis.mesh.dim()
+    nc = D.shape[-1]
+    points = np.arange(chunk.start * nqe, chunk.stop * nqe)
+    wD = np.broadcast_to(at_points(D, points), (points.size, nc, nc)) * w.reshape(-1, 1, 1)
+    wD = wD.reshape(n, nqe, nc, nc)
+    Be = element_strains(basis, axisymmetric, chunk)  # (n, nqe, nc, n_local)
+    if projection is not None:
+        theta = Be[:, :, :3].sum(axis=2)  # (n, nqe, n_local)
+        Be[:, :, :3] += (projection[chunk] @ theta)[:, :, None] / 3.0
+    n_local = Be.shape[-1]
+    rows = Be.reshape(n, nqe * nc, n_local)
+    Ke = rows.transpose(0, 2, 1) @ (wD @ Be).reshape(n, nqe * nc, n_local)
+    ns = n_local // dim
+    return Ke.reshape(n, ns, dim, ns, dim).transpose(0, 1, 3, 2, 4).reshape(n, ns * ns, dim * dim)
+
+
+def elastic_per_element(D: np.ndarray, nel: int, nqe: int) -> np.ndarray | None:
+    """``D`` one matrix ``(nc, nc)`` as it is, one per point ``(n_qp, nc, nc)`` as one per element
+    ``(nel, nc, nc)``, or None where it varies within an element."""
+    if D.ndim == 2:
+        return D
+    D = D.reshape(nel, nqe, *D.shape[1:])
+    return D[:, 0] if np.array_equal(D, np.broadcast_to(D[:, :1], D.shape)) else None
+
+
+class NodePairs:
+    """The sparse pattern of a vector basis's node pairs: the ``dim x dim`` blocks of a matrix
+    whose element ``e`` couples its nodes ``i`` and ``j`` (the vector function ``dim j + a`` is
+    node ``j``'s component ``a``, dof ``dim node + a``).
+
+    Each element's ``n_scalar^2`` pairs go to their block by one sparse product (the pairs sorted
+    once), so a chunk of elements adds its blocks without a sparse matrix of its own, and the
+    matrix is made once from the summed blocks (scipy's block matrix to CSR).
+    """
+
+    def __init__(self, basis):
+        self.dim = dim = basis.mesh.dim()
+        self.n_nodes, self.N = basis.N // dim, basis.N
+        nodes = (basis.element_dofs[::dim] // dim).T.astype(np.int64)  # (n_elements, n_scalar)
+        self.pairs_per_element = nodes.shape[1] ** 2
+        keys, block = np.unique((nodes[:, :, None] * self.n_nodes + nodes[:, None, :]).ravel(),
+                                return_inverse=True)
+        #: (n_blocks, n_elements * n_scalar^2): the block of each element's pair, one entry a column
+        self.gather = sp.csc_matrix((np.ones(block.size), block.ravel(), np.arange(block.size + 1)),
+                                    shape=(keys.size, block.size))
+        rows = keys // self.n_nodes
+        self.indices = keys - rows * self.n_nodes
+        self.indptr = np.searchsorted(rows, np.arange(self.n_nodes + 1))
+
+    def zeros(self) -> np.ndarray:
+        return np.zeros((self.indices.size, self.dim * self.dim))
+
+    def add(self, data: np.ndarray, elements: slice, blocks: np.ndarray) -> None:
+        """Add the ``elements``' blocks ``(n, n_scalar^2, dim * dim)`` to ``data``
+        (:meth:`zeros`)."""
+        per = self.pairs_per_element
+        columns = slice(elements.start * per, elements.stop * per)
+        data += self.gather[:, columns] @ blocks.reshape(-1, self.dim * self.dim)
+
+    def matrix(self, data: np.ndarray) -> sp.csr_matrix:
+        """The CSR matrix of the summed blocks ``data``, without its exact zeros."""
+        out = sp.bsr_matrix((data.reshape(-1, self.dim, self.dim), self.indices, self.indptr),
+                            shape=(self.N, self.N)).tocsr()
+        out.eliminate_zeros()
+        return out
 
 
 def internal_forces(B: sp.csr_matrix, weights: np.ndarray, sigma: np.ndarray) -> np.ndarray:

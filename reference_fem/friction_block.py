@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from skfem import (CellBasis, ElementHex2, ElementQuad2, ElementVector, FacetBasis, LinearForm, MeshHex1,
+from skfem import (CellBasis, ElementHex2, ElementQuad2, FacetBasis, LinearForm, MeshHex1,
                    MeshHex2, MeshQuad1, MeshQuad2, asm)
 from skfem.helpers import dot
 
@@ -22,6 +22,7 @@ from cases.material import Material
 
 from . import forms, laws
 from .contact import wall_rows
+from .element import VectorElement
 from .mass import consistent_mass, redistributed_mass
 from .model import INTORDER
 from .newmark import march, newmark_constants
@@ -103,7 +104,7 @@ def pulled_block(friction: float, pull: float, dim: int = 2, size=(0.1, 0.1, 0.0
     edges, n = (size[::2], counts[::2]) if dim == 2 else (size, counts)
     lin = (MeshQuad1 if dim == 2 else MeshHex1).init_tensor(*(np.linspace(0, a, k + 1) for a, k in zip(edges, n)))
     mesh = (MeshQuad2 if dim == 2 else MeshHex2).from_mesh(lin)
-    element = ElementVector(ElementQuad2() if dim == 2 else ElementHex2())
+    element = VectorElement(ElementQuad2() if dim == 2 else ElementHex2())
     basis = CellBasis(mesh, element, intorder=INTORDER)
     weights = forms.quadrature_weights(basis, False)
     bottom = mesh.facets_satisfying(lambda x: np.isclose(x[-1], 0.0), boundaries_only=True)

@@ -67,13 +67,16 @@ INSIDE_TOL = 1e-8
 
 class _Mapping(MappingIsoparametric):
     """Isoparametric mapping whose inverse stops at :data:`INVF_TOL`, and whose inverse
-    Jacobian is kept for the points last asked for.
+    Jacobian and shape functions are kept for the points last asked for.
 
     scikit-fem's default (1e-12) lies below round-off for thin curved elements far from the
     origin (the 3D dome: 0.2 in thick at 22 in), where Newton then stalls. A basis asks for the
     inverse Jacobian once per shape function, at the same points: scikit-fem computes it again
     each time (81 times for a 27-node vector element); a facet basis inverts the map twice, for
-    its points and for their normals, in the same elements.
+    its points and for their normals, in the same elements. Each entry of the map and of its
+    Jacobian evaluates every shape function and its gradient again (a 27-node hexahedron's
+    Jacobian: 243 evaluations where 27 give it): here they are evaluated once per points
+    (:meth:`_local`) and summed node by node in scikit-fem's order, so the sums are its own.
     """
 
     def invF(self, x, tind=None, newton_max_iters=50, newton_tol=INVF_TOL):
@@ -91,6 +94,53 @@ class _Mapping(MappingIsoparametric):
             # the arguments are kept with it, so their identities stand for their values
             last = self._last_invDF = (X, tind, super().invDF(X, tind))
         return last[2]
+
+    def _local(self, element, X, n: int):
+        """``element``'s first ``n`` shape functions and their gradients at the reference points
+        ``X`` (``lbasis(X, k)``'s two parts, lists over ``k``), kept for the points last asked
+        for."""
+        last = getattr(self, "_last_local", None)
+        if last is None or last[0] is not element or last[1] is not X or last[2] != n:
+            # the points are kept with them, so their identity stands for their values
+            values = [element.lbasis(X, k) for k in range(n)]
+            last = (element, X, n, [v[0] for v in values], [v[1] for v in values])
+            self._last_local = last
+        return last[3], last[4]
+
+    def _sum(self, nodes, element, X, i, j=None):
+        """Entry ``i`` of the map (``j`` None) or ``(i, j)`` of its Jacobian, on the elements (or
+        facets) whose nodes are ``nodes`` (n_functions, n): ``sum_k p[i, nodes[k]] phi_k``,
+        over ``k`` in scikit-fem's order."""
+        phi, dphi = self._local(element, X, nodes.shape[0])
+        p = self.mesh.doflocs
+        out = np.zeros((nodes.shape[1], X.shape[-1]))
+        for k in range(nodes.shape[0]):
+            out += p[i, nodes[k]][:, None] * (phi[k] if j is None else dphi[k][j])
+        return out
+
+    def _cell_nodes(self, tind):
+        t = self.mesh.dofs.element_dofs
+        return t if tind is None else t[:, tind]
+
+    def _facet_nodes(self, find):
+        facets = self.mesh.facets
+        if len(self.mesh.dofs.edge_dofs) > 0:
+            facets = np.vstack((facets, self.mesh.dofs.edge_dofs[0, self.mesh.f2e]))
+        if len(self.mesh.dofs.facet_dofs) > 0:
+            facets = np.vstack((facets, self.mesh.dofs.facet_dofs))
+        return facets if find is None else facets[:, find]
+
+    def Fmap(self, i, X, tind=None):
+        return self._sum(self._cell_nodes(tind), self.elem, X, i)
+
+    def _J(self, i, j, X, tind=None):
+        return self._sum(self._cell_nodes(tind), self.elem, X, i, j)
+
+    def bndmap(self, i, X, find=None):
+        return self._sum(self._facet_nodes(find), self.bndelem, X, i)
+
+    def bndJ(self, i, j, X, find=None):
+        return self._sum(self._facet_nodes(find), self.bndelem, X, i, j)
 
 
 class _AxisMapping(_Mapping):

@@ -6,12 +6,13 @@ import functools
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import ElementHex2, ElementQuad2, ElementVector, asm
+from skfem import ElementHex2, ElementQuad2, asm
 
 from cases.params import UnsupportedCase
 from cases.geometry import PRISM, RING
 
 from . import forms, laws, regions, swept, ties
+from .element import VectorElement
 from .frames import AXISYMMETRIC, SOLID, body_coordinates, body_rotation, in_intervals, section_of, x3_of
 from .mass import consistent_mass, lumped_mass, redistributed_mass
 from .mesh import RefMesh, build_mesh
@@ -62,7 +63,7 @@ class Model:
         mesh = self.rmesh.mesh
         self.dim = mesh.dim()
         scalar = ElementQuad2() if self.dim == 2 else ElementHex2()
-        self.element = ElementVector(scalar)
+        self.element = VectorElement(scalar)
         self.basis = ties.cell_basis(mesh, self.element, intorder=INTORDER)
         axisym = self.rep == AXISYMMETRIC
         self.weights = forms.quadrature_weights(self.basis, axisym)

@@ -57,7 +57,10 @@ class MovingPressure:
                                      shape=(model.basis.N, self.facets.size))
 
     def _basis(self, facets, quadrature) -> FacetBasis:
-        return ties.facet_basis(self.model.rmesh.mesh, self.model.element, facets=facets, quadrature=quadrature)
+        """The scalar element's facet basis (the vector function ``dim j + a`` is its function
+        ``j`` along component ``a``: a third of the functions to evaluate in 3D)."""
+        return ties.facet_basis(self.model.rmesh.mesh, self.model.element.elem, facets=facets,
+                                quadrature=quadrature)
 
     def _x3_along_facets(self):
         """Per facet: x3 at its reference origin, its change along the reference coordinate it
@@ -95,17 +98,19 @@ class MovingPressure:
         x = np.polynomial.legendre.leggauss(ALONG)[0]
         inverse = np.linalg.inv(np.polynomial.legendre.legvander(x, ALONG - 1))  # values -> coefficients
         n_local = self.model.basis.Nbfun  # a facet basis's local dofs are its element's
+        dim = self.model.dim
         dofs = np.empty((n_local, self.facets.size), int)
         anti = np.empty((self.facets.size, n_local, ALONG + 1))
         for along in np.unique(self.along):
             mine = np.flatnonzero(self.along == along)
             fb = self._basis(self.facets[mine], self._rule(int(along), 0.5 * (x + 1)))
-            n = np.asarray(fb.normals)
-            per_point = -np.stack([np.einsum("dfq,dfq,fq->fq", np.asarray(fb.basis[i][0]), n, fb.dx)
-                                   for i in range(fb.Nbfun)], axis=1)  # (facets, n_local, points)
+            phi = np.stack([np.asarray(fb.basis[j][0]) for j in range(fb.Nbfun)], axis=1)  # (f, scalar, q)
+            n_dx = np.asarray(fb.normals).transpose(1, 0, 2) * fb.dx[:, None]  # (f, dim, q)
+            # vector function dim j + a: -phi_j n_a dS
+            per_point = -(phi[:, :, None] * n_dx[:, None]).reshape(mine.size, n_local, -1)
             values = per_point.reshape(per_point.shape[:2] + (ALONG, -1)).sum(axis=-1)  # across summed
             coefficients = values @ inverse.T
-            dofs[:, mine] = fb.element_dofs
+            dofs[:, mine] = (dim * fb.element_dofs[:, None] + np.arange(dim)[:, None]).reshape(n_local, -1)
             anti[mine] = 0.5 * np.polynomial.legendre.legint(coefficients, axis=-1)  # ds = dx / 2
         return dofs, anti
 

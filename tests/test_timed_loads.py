@@ -206,17 +206,25 @@ def _gauss_rule(fdim, lo, hi, along, points=4):
 
 
 def _by_facet_basis(unit, t):
-    """The moving load as integrated before it was tabulated: a facet basis on each covered
-    range's own Gauss rule (65 ms a step on the turning patches), the whole facets' together."""
+    """The moving load as integrated before it was tabulated: a facet basis of scikit-fem's vector
+    element on each covered range's own Gauss rule (65 ms a step on the turning patches), the
+    whole facets' together."""
+    from skfem import ElementVector
+
+    from reference_fem import ties
+
+    model = unit.model
+    element = ElementVector(model.element.elem)
     lo, hi = unit.coverage(t)
     whole = (lo == 0.0) & (hi == 1.0)
     groups = [(np.flatnonzero(whole & (unit.along == a)), 0.0, 1.0, a) for a in np.unique(unit.along)]
     groups += [([f], lo[f], hi[f], unit.along[f]) for f in np.flatnonzero((hi > lo) & ~whole)]
-    Q = np.zeros(unit.model.basis.N)
+    Q = np.zeros(model.basis.N)
     for facets, a, b, along in groups:
         if len(facets) == 0:
             continue
-        fb = unit._basis(unit.facets[facets], _gauss_rule(unit.fdim, a, b, int(along)))
+        fb = ties.facet_basis(model.rmesh.mesh, element, facets=unit.facets[facets],
+                              quadrature=_gauss_rule(unit.fdim, a, b, int(along)))
         n = np.asarray(fb.normals)
         local = -np.stack([np.einsum("dfq,dfq,fq->f", np.asarray(fb.basis[i][0]), n, fb.dx) for i in range(fb.Nbfun)])
         np.add.at(Q, fb.element_dofs.ravel(), local.ravel())
