@@ -41,7 +41,7 @@ def test_the_exact_thick_cylinder_is_within_the_stored_truths_uncertainty():
 @needs_ccx
 @pytest.mark.parametrize("refine,modes,total", [
     (1, 50, 0.0672),  # the full plan's cheapest CalculiX run (3 CPU s of ccx)
-    pytest.param(2, 400, 0.0144, marks=pytest.mark.slow),  # its best (6.5 minutes of ccx)
+    pytest.param(2, 400, 0.0144, marks=pytest.mark.slow),  # its best (340-380 s of ccx)
 ])
 def test_calculix_modal_against_the_exact_answer_as_against_the_stored_truth(refine, modes, total):
     """CalculiX modal runs of the full plan as ``smfem run thick_cylinder --solver calculix --set
