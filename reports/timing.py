@@ -6,7 +6,9 @@ runs behind the headline's ``cpu_s_to_*`` cells (:func:`smfem.studies.metrics.co
 costs take the minimum of the repeats, so SMFEM's speed-ups, its cheaper element and the
 verdict are ratios and choices of minima. The study's own single-shot CPU times stay in
 ``runs.csv``, ``fronts.csv`` and the work-precision figures; a bound (``> x``: a solver that
-does not reach the target) keeps the single shot of that solver's dearest run.
+does not reach the target) keeps the single shot of that solver's dearest run. A quick pass
+times only the decisive runs that can decide their cost (:func:`contenders`): SMFEM's element
+whose shot is several times the other's keeps its shot, as its row's cost, outside the pass.
 """
 
 from __future__ import annotations
@@ -39,6 +41,26 @@ def decisive(an: CaseAnalysis) -> dict[tuple[str, float], Run]:
     return found
 
 
+def contenders(runs: dict[tuple[str, float], Run], rivals: float | None) -> dict[tuple[str, float], Run]:
+    """``runs`` (:func:`decisive`) less those that cannot decide the cost they compete for: a run
+    whose study shot is over ``rivals`` times the cheapest shot at its target among its rivals
+    (SMFEM's elements, whose cheaper one is SMFEM's cost; the engines or procedures of one
+    headline row). None: all of them."""
+    if rivals is None:
+        return runs
+    shot = {key: float(run.summary["cpu_time_s"]) for key, run in runs.items()}
+
+    def rows(solver: str) -> str:
+        return SMFEM if lookup(solver).family == SMFEM else headline_name(solver)
+
+    cheapest = {}
+    for (solver, target), cpu in shot.items():
+        key = (rows(solver), target)
+        cheapest[key] = min(cpu, cheapest.get(key, cpu))
+    return {(solver, target): run for (solver, target), run in runs.items()
+            if shot[solver, target] <= rivals * cheapest[rows(solver), target]}
+
+
 def interleaved(runs) -> list:
     """The distinct jobs of ``runs`` in the order to time them: SMFEM's and the others' by turns."""
     jobs = list(dict.fromkeys(run.job for run in runs))
@@ -52,7 +74,7 @@ def time_headline(analyses: list[CaseAnalysis], rule: TimingRule = TimingRule(),
     """Time every scene's decisive runs again and put each minimum in its cost (and the timing in
     ``an.timings``): the headline made after this holds ratios of minima. Returns the rows of
     ``tables/timing.csv``; ``retime_options``: :func:`smfem.studies.timing.retime`'s ``run``."""
-    chosen = {an.case.name: decisive(an) for an in analyses}
+    chosen = {an.case.name: contenders(decisive(an), rule.rivals) for an in analyses}
     shot = lambda run: float(run.summary["cpu_time_s"])
     timed = [[run for run in runs.values() if not rule.kept(shot(run))] for runs in chosen.values()]
     timings = retime([interleaved(runs) for runs in timed if runs], rule, progress=progress, **retime_options)

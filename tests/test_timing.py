@@ -69,3 +69,24 @@ def test_the_quick_settings_keep_the_study_shot_of_a_dear_run():
     kept = Timing(job, (30.9,), retimed=False)
     assert kept.repeats == 0 and kept.cpu_min == kept.cpu_max == 30.9
     assert Timing(job, (1.0, 0.9, 1.1)).repeats == 3
+
+
+def test_the_quick_settings_time_only_the_runs_that_can_decide_their_cost():
+    """A quick pass leaves out a decisive run whose study shot is over three times its rivals'
+    cheapest at that target: SMFEM's elements rival each other, a competitor's engines and
+    procedures each other; the 2D reference rivals nobody. A full pass and a retime keep all."""
+    from reports.timing import contenders
+    from smfem.studies.cache import Run
+
+    def run(cpu):
+        return Run(None, "ok", "", None, None, {"cpu_time_s": cpu})
+
+    runs = {("smfem", 0.01): run(1.4), ("smfem-quad9", 0.01): run(8.8),  # quad9: 6.3 times, left out
+            ("smfem", 0.05): run(0.9), ("smfem-quad9", 0.05): run(2.2),  # 2.4 times: timed
+            ("reference-2d", 0.01): run(30.0),  # no rival, whatever its cost
+            ("reference-3d", 0.01): run(5.0), ("reference-3d-explicit", 0.01): run(16.0),  # 3.2 times: out
+            ("calculix", 0.05): run(50.0), ("calculix-modal", 0.05): run(6.0)}  # implicit out
+    quick = contenders(runs, TimingRule.of(False).rivals)
+    assert set(runs) - set(quick) == {("smfem-quad9", 0.01), ("reference-3d-explicit", 0.01), ("calculix", 0.05)}
+    assert all(quick[key] is runs[key] for key in quick)
+    assert contenders(runs, TimingRule.of(True).rivals) == runs == contenders(runs, TimingRule.of(False, retime=True).rivals)

@@ -47,7 +47,9 @@ def _timing(parser) -> None:
                              f"the pass stays within this many CPU s (default {BUDGET_S:g}); 0: never twice. The "
                              f"quick settings time only runs whose study shot took at most "
                              f"{TimingRule.of(False).kept_s:g} s: a dearer run's shot stands (0 repeats; --retime times it), "
-                             f"and do not wait for the second repeat within {100 * rule.hold:g} %% of the minimum")
+                             f"do not wait for the second repeat within {100 * rule.hold:g} %% of the minimum, and do not "
+                             f"time a run whose shot is over {TimingRule.of(False).rivals:g} times its rival's (SMFEM's "
+                             f"other element, the other engine or procedure): it cannot decide its cost")
     parser.add_argument("--no-timing", action="store_true",
                         help="no timing pass: the headline keeps the study's single-shot CPU times")
 
