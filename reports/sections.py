@@ -19,10 +19,14 @@ from smfem.studies.effectivity import summary as effectivity_summary
 from smfem.studies.metrics import TARGETS, TRUTH_MARGIN
 from smfem.studies.plan import REFERENCE, SMFEM
 from smfem.studies.study import StudyResult
+from smfem.studies.timing import TimingRule
 from .blocks import Section, figure, h, items, p, table
 from .scene import scene
 from .timing import timed_runs
 from .verdict import verdict
+
+#: the quick settings' timing rule, which the headline's reading says
+QUICK_TIMING = TimingRule.of(False)
 
 
 @dataclass
@@ -100,7 +104,11 @@ def headline(ctx: ReportContext) -> list[Section]:
           "other's by turns (the timing pass, "
           "tables/timing.csv): their CPU time is the minimum over the repeats and each speed-up a ratio of minima, "
           "with its range over the repeats beside it (the other's fastest over SMFEM's slowest to the other's "
-          "slowest over SMFEM's fastest). A reason in a cell is a numbered note under its table."),
+          "slowest over SMFEM's fastest). On the quick settings a run whose study shot took over "
+          f"{QUICK_TIMING.kept_s:g} s keeps that shot (0 repeats in tables/timing.csv), and one whose shot is over "
+          f"{QUICK_TIMING.rivals:g} times its rival's (SMFEM's other element, the other engine or procedure), which "
+          "cannot decide its row's cost, keeps it outside the pass. A reason in a cell is a numbered note under its "
+          "table."),
         p("Stresses and plastic strains have rows of their own in each scene, outside the headline measure: each "
           "family judged on its own (max over its probes of the relative max-norm error) and against its own "
           f"targets ({targets}): a stress at a wave front or a plastic strain at a yielding point converges more "

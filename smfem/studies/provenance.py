@@ -3,7 +3,8 @@
 The run cache keys a run by a hash of the sources its results depend on, so a report may take a
 run made by an earlier commit whose numerics are the same. A published report says how many of
 its runs were made from the sources it was made with (``run.json``): one made "from nothing at
-the final commit" has every run made by a commit whose :data:`SOURCES` equal that commit's,
+the final commit" has every run made by a commit whose :data:`SOURCES` (what decides the runs)
+equal that commit's,
 whether by one pass of the command or by several into the same new cache (a full report can
 outlast a working session; a stopped pass leaves its finished runs stored, and a commit of
 README alone between two passes changes no source).
@@ -18,8 +19,10 @@ from pathlib import Path
 
 #: the checkout holding the package, when it is one (an installed wheel is not)
 ROOT = Path(__file__).resolve().parents[2]
-#: what a report is made of (its numerics, scenes, studies and pages), unlike the tests and docs
-SOURCES = ("smfem", "reference_fem", "cases", "reports", "pyproject.toml")
+#: what decides a report's runs: the solvers' numerics, the scenes, the study plan and the runner
+#: (its pages, ``reports/``, are written by the last pass from the last sources whatever made the
+#: runs; the tests and docs decide nothing)
+SOURCES = ("smfem", "reference_fem", "cases", "pyproject.toml")
 
 
 def _git(*args) -> str:
