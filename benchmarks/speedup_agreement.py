@@ -1,0 +1,85 @@
+"""Whether two headline tables agree on SMFEM's speed-ups: two `smfem report --retime` passes of
+one cache (issue 59's must-show: within 10 % on every measured speed-up), or two reports.
+
+    python benchmarks/speedup_agreement.py A/tables/headline.csv B/tables/headline.csv [--within 0.1]
+    python benchmarks/speedup_agreement.py --retime DIR [--quick | --full]   # two retimes of DIR, one after the other
+    python benchmarks/speedup_agreement.py --tiny   # the published full report's table against itself
+
+A measured speed-up is a ratio ("12.3x"); a bound ("> 7.7x"), "neither reaches it" and the like
+are not measured and are listed only where the two tables differ. Prints one line per speed-up
+and the largest relative difference, B over A.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+ROOT = Path(__file__).resolve().parents[1]
+PUBLISHED = ROOT / "docs" / "full-report" / "tables" / "headline.csv"
+MEASURED = re.compile(r"[0-9.]+(e[+-]?[0-9]+)?x")
+
+
+def speedups(table: pd.DataFrame) -> dict[tuple[str, str, str], str]:
+    """``(case, solver, target) -> cell`` of every speed-up column (``smfem_speedup_1pct`` ...)."""
+    columns = [c for c in table.columns if c.startswith("smfem_speedup_") and not c.endswith("_range")]
+    return {(row.case, row.solver, c.removeprefix("smfem_speedup_")): str(getattr(row, c))
+            for row in table.itertuples() for c in columns if str(getattr(row, c)) not in ("nan", "")}
+
+
+def compare(a: pd.DataFrame, b: pd.DataFrame) -> tuple[list[str], float, int]:
+    """Lines ``case solver target: A -> B (+d %)``, the largest |B / A - 1| over the measured ones and their count."""
+    first, second = speedups(a), speedups(b)
+    lines, worst, measured = [], 0.0, 0
+    for key in sorted(first.keys() | second.keys()):
+        x, y = first.get(key, "-"), second.get(key, "-")
+        if MEASURED.fullmatch(x) and MEASURED.fullmatch(y):
+            change = float(y[:-1]) / float(x[:-1]) - 1
+            worst, measured = max(worst, abs(change)), measured + 1
+            lines.append(f"{' '.join(key)}: {x} -> {y} ({100 * change:+.1f} %)")
+        elif x != y:
+            lines.append(f"{' '.join(key)}: {x} -> {y} (not both measured)")
+    return lines, worst, measured
+
+
+def retime_twice(out: Path, settings: str) -> tuple[Path, Path]:
+    """Two ``smfem report --retime`` passes of ``out``, one after the other; their headline tables kept."""
+    kept = []
+    for n in (1, 2):
+        subprocess.run([sys.executable, "-m", "smfem", "report", "--retime", f"--{settings}", "--out", str(out)],
+                       check=True)
+        kept.append(Path(shutil.copyfile(out / "tables" / "headline.csv", out / f"headline-retime{n}.csv")))
+    return kept[0], kept[1]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("tables", nargs="*", type=Path, help="two headline.csv files")
+    ap.add_argument("--retime", type=Path, metavar="DIR", help="retime the report in DIR twice and compare")
+    ap.add_argument("--full", action="store_true", help="DIR holds a full report (default quick)")
+    ap.add_argument("--within", type=float, default=0.10, help="the agreement asked for (default 0.10)")
+    ap.add_argument("--tiny", action="store_true", help="the published headline against itself")
+    args = ap.parse_args(argv)
+    if args.tiny:
+        paths = (PUBLISHED, PUBLISHED)
+    elif args.retime:
+        paths = retime_twice(args.retime, "full" if args.full else "quick")
+    elif len(args.tables) == 2:
+        paths = tuple(args.tables)
+    else:
+        ap.error("give two headline.csv files, --retime DIR or --tiny")
+    lines, worst, measured = compare(*(pd.read_csv(p) for p in paths))
+    print("\n".join(lines))
+    print(f"{measured} measured speed-ups in both; largest difference {100 * worst:.1f} %: "
+          f"{'within' if worst <= args.within else 'NOT within'} {100 * args.within:g} %")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
