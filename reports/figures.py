@@ -73,12 +73,14 @@ def _axes(height: float):
 
 
 def _log_axes(ax) -> None:
-    """Log scales whose limits reach the powers of ten around the data: on a range narrower
-    than a decade matplotlib labels minor ticks, and those run into each other."""
+    """Log scales whose limits reach the powers of ten around the data, labelled at those powers
+    only: on a range of a decade or two matplotlib labels minor ticks too (2 x 10^-2, 3 x 10^-2),
+    and in a small panel those run into each other."""
     ax.set(xscale="log", yscale="log")
-    for get, put in ((ax.get_xlim, ax.set_xlim), (ax.get_ylim, ax.set_ylim)):
+    for get, put, axis in ((ax.get_xlim, ax.set_xlim, ax.xaxis), (ax.get_ylim, ax.set_ylim, ax.yaxis)):
         lo, hi = get()
         put(10 ** math.floor(math.log10(lo)), 10 ** math.ceil(math.log10(hi)))
+        axis.set_minor_formatter(NullFormatter())
 
 
 def _label_points(ax, labels) -> None:

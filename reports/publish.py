@@ -44,16 +44,22 @@ def _memory_gb() -> float | None:
         return None
 
 
-def made_here(study) -> tuple[int, int]:
-    """``(runs, of them made from these sources)``: the distinct stored runs ``study`` read (series,
-    same-dt references, fields, truth runs, error estimates), and how many of them record a commit
-    whose sources are this checkout's (:func:`smfem.studies.provenance.same_sources`)."""
+def made_here(study) -> dict:
+    """What the distinct stored runs ``study`` read (series, same-dt references, fields, truth runs,
+    error estimates) record of their making: ``runs_stored``, ``runs_made_from_these_sources``
+    (a commit whose sources are this checkout's, :func:`smfem.studies.provenance.same_sources`),
+    and ``runs_made_from`` / ``runs_made_until``, the first and last time one was made (a report
+    made in two passes spans both, with the pause between them)."""
     runs = {}
     for case in study.cases:
         for run in [*case.all_runs(), case.fields, *(run for run, _ in case.estimates.values())]:
             if run is not None and run.path is not None:
                 runs[run.path] = run
-    return len(runs), sum(provenance.same_sources(made_of(run).get("commit")) for run in runs.values())
+    made = [made_of(run) for run in runs.values()]
+    times = sorted(m["at"] for m in made if m.get("at"))
+    return {"runs_stored": len(runs),
+            "runs_made_from_these_sources": sum(provenance.same_sources(m.get("commit")) for m in made),
+            "runs_made_from": times[0] if times else None, "runs_made_until": times[-1] if times else None}
 
 
 def publish(report, directory: Path, settings: str, workers: int, scheduler: str | None) -> dict:
@@ -66,7 +72,6 @@ def publish(report, directory: Path, settings: str, workers: int, scheduler: str
     runs = report.tables["runs"]
     memory = pd.to_numeric(runs.get("peak_memory_mb", pd.Series(dtype=float)), errors="coerce")
     largest = runs.loc[memory.idxmax()] if memory.notna().any() else None
-    stored, from_here = made_here(report.study)
     made = {
         "command": "smfem report" + (" --full" if settings == "full" else "")
                    + (f" --scheduler {scheduler}" if scheduler else f" --workers {workers}"),
@@ -77,8 +82,7 @@ def publish(report, directory: Path, settings: str, workers: int, scheduler: str
         # a report made from nothing at a commit has every run made from its sources, by this pass
         # or by an earlier one into the same new cache (smfem.studies.provenance)
         "commit": provenance.commit(),
-        "runs_stored": stored,
-        "runs_made_from_these_sources": from_here,
+        **made_here(report.study),
         "cpu_time_s_of_runs": round(float(pd.to_numeric(runs.cpu_time_s, errors="coerce").sum()), 1),
         "peak_memory_mb": None if largest is None else round(float(largest.peak_memory_mb), 1),
         "peak_memory_run": None if largest is None else f"{largest.case} {largest.solver} {largest.level}",
@@ -134,8 +138,9 @@ def _provenance(made: dict) -> str:
     if made["commit"] is None:
         return "; no commit recorded"
     commit = made["commit"][:12] + ("" if "+" not in made["commit"] else " with changes")
+    span = f", from {made['runs_made_from']} to {made['runs_made_until']}" if made.get("runs_made_from") else ""
     return (f"; {made.get('runs_made_from_these_sources', 0)} of its {made.get('runs_stored', 0)} stored runs made from "
-            f"the sources of commit {commit}")
+            f"the sources of commit {commit}{span}")
 
 
 def _markdown(table: pd.DataFrame) -> str:
