@@ -41,6 +41,11 @@ def decisive(an: CaseAnalysis) -> dict[tuple[str, float], Run]:
     return found
 
 
+def study_shot(run: Run) -> float:
+    """The CPU s the study measured for ``run``, once: what a run not timed again keeps."""
+    return float(run.summary["cpu_time_s"])
+
+
 def contenders(runs: dict[tuple[str, float], Run], rivals: float | None) -> dict[tuple[str, float], Run]:
     """``runs`` (:func:`decisive`) less those that cannot decide the cost they compete for: a run
     whose study shot is over ``rivals`` times the cheapest shot at its target among its rivals
@@ -48,7 +53,7 @@ def contenders(runs: dict[tuple[str, float], Run], rivals: float | None) -> dict
     headline row). None: all of them."""
     if rivals is None:
         return runs
-    shot = {key: float(run.summary["cpu_time_s"]) for key, run in runs.items()}
+    shot = {key: study_shot(run) for key, run in runs.items()}
 
     def rows(solver: str) -> str:
         return SMFEM if lookup(solver).family == SMFEM else headline_name(solver)
@@ -75,11 +80,10 @@ def time_headline(analyses: list[CaseAnalysis], rule: TimingRule = TimingRule(),
     ``an.timings``): the headline made after this holds ratios of minima. Returns the rows of
     ``tables/timing.csv``; ``retime_options``: :func:`smfem.studies.timing.retime`'s ``run``."""
     chosen = {an.case.name: contenders(decisive(an), rule.rivals) for an in analyses}
-    shot = lambda run: float(run.summary["cpu_time_s"])
-    timed = [[run for run in runs.values() if not rule.kept(shot(run))] for runs in chosen.values()]
+    timed = [[run for run in runs.values() if not rule.kept(study_shot(run))] for runs in chosen.values()]
     timings = retime([interleaved(runs) for runs in timed if runs], rule, progress=progress, **retime_options)
-    timings |= {run.job: Timing(run.job, (shot(run),), retimed=False) for runs in chosen.values()
-                for run in runs.values() if rule.kept(shot(run))}
+    timings |= {run.job: Timing(run.job, (study_shot(run),), retimed=False) for runs in chosen.values()
+                for run in runs.values() if rule.kept(study_shot(run))}
     rows = []
     for an in analyses:
         for (solver, target), run in chosen[an.case.name].items():
