@@ -13,17 +13,20 @@ whose shot is several times the other's keeps its shot, as its row's cost, outsi
 
 from __future__ import annotations
 
-from dataclasses import replace
+import json
+from dataclasses import asdict, replace
 from itertools import zip_longest
+from pathlib import Path
 
 import pandas as pd
 
 from smfem.runs.registry import headline_name, lookup
-from smfem.studies.cache import Run
+from smfem.studies import provenance
+from smfem.studies.cache import Run, key_of
 from smfem.studies.jobs import OK
 from smfem.studies.metrics import REACHED
 from smfem.studies.plan import SMFEM
-from smfem.studies.timing import Timing, TimingRule, retime
+from smfem.studies.timing import Timing, TimingRule, in_one_worker, retime
 
 from .analysis import CaseAnalysis
 
@@ -74,14 +77,77 @@ def interleaved(runs) -> list:
     return [j for pair in zip_longest(mine, others) for j in pair if j is not None]
 
 
+def boot() -> str:
+    """This boot of this machine (Linux's ``boot_id``; '' elsewhere): repeats from another
+    machine, or another boot of it, are not this pass's."""
+    try:
+        return Path("/proc/sys/kernel/random/boot_id").read_text().strip()
+    except OSError:
+        return ""
+
+
+class PassLog:
+    """The repeats of a timing pass as it takes them, one JSON line per batch in ``path``, so that
+    a pass stopped half way (a full report's pass takes hours: its dearest runs are timed once
+    each, CalculiX's for over an hour) resumes where it stopped: a resumed pass replays the logged
+    batches in the order the pass asks for them, then times the rest. A log is taken up only
+    when it was made on this boot of this machine, by the same rule, from the same
+    :data:`~smfem.studies.provenance.SOURCES`; else it is started anew. The pass removes it
+    when it finishes (:func:`time_headline`): a later pass, a ``--retime``, times afresh."""
+
+    def __init__(self, path: Path, rule: TimingRule, run=in_one_worker):
+        self.path, self.run = Path(path), run
+        self.header = {"rule": asdict(rule), "boot": boot(), "commit": provenance.commit()}
+        self.logged: dict[str, list[list[float]]] = {}
+        lines = self.path.read_text().splitlines() if self.path.exists() else []
+        if lines and self._resumable(json.loads(lines[0])):
+            for line in lines[1:]:
+                entry = json.loads(line)
+                self.logged.setdefault(entry["job"], []).append(entry["times"])
+        else:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.path.write_text(json.dumps(self.header) + "\n")
+
+    def _resumable(self, header: dict) -> bool:
+        same = {k: header.get(k) for k in ("rule", "boot")} == {k: self.header[k] for k in ("rule", "boot")}
+        return same and bool(header["boot"]) and provenance.same_sources(header.get("commit"))
+
+    @property
+    def resumed(self) -> int:
+        """How many logged repeats this pass takes up."""
+        return sum(len(t) for batches in self.logged.values() for t in batches)
+
+    def __call__(self, job, repeats: int) -> list[float]:
+        """``repeats`` CPU times of ``job``: its next logged batch, else measured and logged."""
+        key = json.dumps(key_of(job), sort_keys=True, default=str)
+        batches = self.logged.get(key)
+        if batches:
+            return batches.pop(0)
+        times = self.run(job, repeats)
+        with self.path.open("a") as f:
+            f.write(json.dumps({"job": key, "times": times}) + "\n")
+        return times
+
+    def finish(self) -> None:
+        self.path.unlink(missing_ok=True)
+
+
 def time_headline(analyses: list[CaseAnalysis], rule: TimingRule = TimingRule(), progress: bool = True,
-                  **retime_options) -> pd.DataFrame:
+                  log: Path | None = None, **retime_options) -> pd.DataFrame:
     """Time every scene's decisive runs again and put each minimum in its cost (and the timing in
     ``an.timings``): the headline made after this holds ratios of minima. Returns the rows of
-    ``tables/timing.csv``; ``retime_options``: :func:`smfem.studies.timing.retime`'s ``run``."""
+    ``tables/timing.csv``; ``log``: where the pass keeps its repeats until it finishes
+    (:class:`PassLog`); ``retime_options``: :func:`smfem.studies.timing.retime`'s ``run``."""
     chosen = {an.case.name: contenders(decisive(an), rule.rivals) for an in analyses}
     timed = [[run for run in runs.values() if not rule.kept(study_shot(run))] for runs in chosen.values()]
+    passlog = PassLog(log, rule, retime_options.pop("run", in_one_worker)) if log is not None else None
+    if passlog is not None:
+        retime_options["run"] = passlog
+        if passlog.resumed and progress:
+            print(f"timing: resuming the pass stopped after {passlog.resumed} repeats ({log})", flush=True)
     timings = retime([interleaved(runs) for runs in timed if runs], rule, progress=progress, **retime_options)
+    if passlog is not None:
+        passlog.finish()
     timings |= {run.job: Timing(run.job, (study_shot(run),), retimed=False) for runs in chosen.values()
                 for run in runs.values() if rule.kept(study_shot(run))}
     rows = []

@@ -129,6 +129,7 @@ def test_the_headline_is_the_cheapest_run_within_each_target_of_the_truth(tiny):
     timing pass (timing.csv); a target below three truth uncertainties is never reached."""
     head = pd.read_csv(tiny.out / "tables" / "headline.csv").set_index(["case", "solver"])
     timing = pd.read_csv(tiny.out / "tables" / "timing.csv").set_index(["case", "solver", "target"])
+    assert not (tiny.out / "timing-pass.jsonl").exists()  # the finished pass's log is gone
     errors = pd.read_csv(tiny.out / "tables" / "errors.csv")
     total = errors[(errors.kind == "total") & errors.headline].groupby(["case", "solver", "level"]).agg(
         err=("err_max", "max"), cpu=("cpu_time_s", "first")).reset_index()

@@ -90,3 +90,58 @@ def test_the_quick_settings_time_only_the_runs_that_can_decide_their_cost():
     assert set(runs) - set(quick) == {("smfem-quad9", 0.01), ("reference-3d-explicit", 0.01), ("calculix", 0.05)}
     assert all(quick[key] is runs[key] for key in quick)
     assert contenders(runs, TimingRule.of(True).rivals) == runs == contenders(runs, TimingRule.of(False, retime=True).rivals)
+
+
+def test_a_stopped_pass_resumes_from_its_log_and_a_log_of_another_boot_or_source_is_not_taken_up(
+        tmp_path, monkeypatch):
+    """A full report's pass outlasts a working session (reports.timing.PassLog): stopped, it
+    replays what it logged and times only the rest, ending with the timings of a pass never
+    stopped; its log is removed when it finishes."""
+    import pytest
+
+    from reports import timing
+
+    monkeypatch.setattr(timing.provenance, "commit", lambda: "abc")
+    monkeypatch.setattr(timing.provenance, "same_sources", lambda made_by: made_by == timing.provenance.commit())
+    monkeypatch.setattr(timing, "boot", lambda: "boot-1")
+    jobs = [Job.make("dome", "smfem", {}), Job.make("dome", "reference-2d", {}), Job.make("rod_impact", "smfem", {})]
+    cost = dict(zip(jobs, (0.5, 1.5, 0.2)))
+    rule, calls = TimingRule(budget_s=200.0), []
+
+    def run(job, repeats):  # times that differ from call to call, as a host's do
+        calls.append(job)
+        return [cost[job] * (1 + 0.01 * ((len(calls) + i) % 7)) for i in range(repeats)]
+
+    whole = retime([jobs[:2], jobs[2:]], rule, run=run, progress=False)
+    n = len(calls)
+
+    class Stopped(Exception):
+        pass
+
+    def stops_after_four(job, repeats):
+        if len(calls) == 4:
+            raise Stopped
+        return run(job, repeats)
+
+    calls.clear()
+    path = tmp_path / "timing-pass.jsonl"
+    with pytest.raises(Stopped):
+        retime([jobs[:2], jobs[2:]], rule, run=timing.PassLog(path, rule, stops_after_four), progress=False)
+    log = timing.PassLog(path, rule, run)
+    assert 4 <= log.resumed < sum(len(t.times) for t in whole.values())
+    resumed = retime([jobs[:2], jobs[2:]], rule, run=log, progress=False)
+    assert len(calls) == n  # four batches replayed, the rest timed
+    assert {j: t.times for j, t in resumed.items()} == {j: t.times for j, t in whole.items()}
+    log.finish()
+    assert not path.exists()
+    # another boot, another rule or other sources: the log is started anew
+    for boot, other_rule, commit in (("boot-2", rule, "abc"), ("boot-1", TimingRule(budget_s=100.0), "abc"),
+                                     ("boot-1", rule, "def")):
+        calls.clear()
+        with pytest.raises(Stopped):
+            retime([jobs[:2], jobs[2:]], rule, run=timing.PassLog(path, rule, stops_after_four), progress=False)
+        monkeypatch.setattr(timing, "boot", lambda boot=boot: boot)
+        monkeypatch.setattr(timing.provenance, "commit", lambda commit=commit: commit)
+        assert timing.PassLog(path, other_rule, run).resumed == 0
+        monkeypatch.setattr(timing, "boot", lambda: "boot-1")
+        monkeypatch.setattr(timing.provenance, "commit", lambda: "abc")
