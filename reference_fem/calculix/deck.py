@@ -131,7 +131,7 @@ def build_deck(case, every: int = 1, procedure: str = IMPLICIT, modes: int | Non
     model = Model(case)
     mesh, dim = model.rmesh.mesh, model.dim
     _, cells = vtk_cells(mesh)
-    name = element(model.rep, procedure)
+    name = element(model.rep, procedure, any(m.plastic for m in case.materials))
     # a linear deck has every node; a serendipity one its cells' corners and mid-sides
     children = 2**dim if linear(procedure) else 1
     elements = split(cells) if children > 1 else cells[:, : CORNERS[dim]]
