@@ -47,18 +47,16 @@ def _memory_gb() -> float | None:
 def made_here(study) -> dict:
     """What the distinct stored runs ``study`` read (series, same-dt references, fields, truth runs,
     error estimates) record of their making: ``runs_stored``, ``runs_made_from_these_sources``
-    (a commit whose sources are this checkout's, :func:`smfem.studies.provenance.same_sources`),
+    (a commit whose sources of that run, :func:`smfem.studies.provenance.sources_of` its solver's
+    packages, are this checkout's: :func:`smfem.studies.provenance.same_sources`),
     and ``runs_made_from`` / ``runs_made_until``, the first and last time one was made (a report
     made in two passes spans both, with the pause between them)."""
-    runs = {}
-    for case in study.cases:
-        for run in [*case.all_runs(), case.fields, *(run for run, _ in case.estimates.values())]:
-            if run is not None and run.path is not None:
-                runs[run.path] = run
-    made = [made_of(run) for run in runs.values()]
-    times = sorted(m["at"] for m in made if m.get("at"))
-    return {"runs_stored": len(runs),
-            "runs_made_from_these_sources": sum(provenance.same_sources(m.get("commit")) for m in made),
+    runs = {run.path: run for case in study.cases for run in case.all_runs() if run.path is not None}
+    made = {path: made_of(run) for path, run in runs.items()}
+    times = sorted(m["at"] for m in made.values() if m.get("at"))
+    mine = sum(provenance.same_sources(made[path].get("commit"), provenance.sources_of(lookup(run.job.solver).packages))
+               for path, run in runs.items())
+    return {"runs_stored": len(runs), "runs_made_from_these_sources": mine,
             "runs_made_from": times[0] if times else None, "runs_made_until": times[-1] if times else None}
 
 
@@ -131,7 +129,7 @@ def front_figure(fronts: pd.DataFrame, path: Path, scenes=FIGURE_SCENES) -> Path
 
 
 def _provenance(made: dict) -> str:
-    """``'; N of its M stored runs made from the sources of commit C'``, from run.json ('' for one
+    """``'; N of its M stored runs made from the sources of commit C that decide them'``, from run.json ('' for one
     written before it said)."""
     if "commit" not in made:
         return ""
@@ -140,7 +138,7 @@ def _provenance(made: dict) -> str:
     commit = made["commit"][:12] + ("" if "+" not in made["commit"] else " with changes")
     span = f", from {made['runs_made_from']} to {made['runs_made_until']}" if made.get("runs_made_from") else ""
     return (f"; {made.get('runs_made_from_these_sources', 0)} of its {made.get('runs_stored', 0)} stored runs made from "
-            f"the sources of commit {commit}{span}")
+            f"the sources of commit {commit} that decide them{span}")
 
 
 def _markdown(table: pd.DataFrame) -> str:

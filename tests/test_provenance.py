@@ -35,3 +35,14 @@ def test_head_made_these_sources_unless_they_changed_and_the_first_commit_did_no
     assert provenance.same_sources(first) is (first == head and not changed)  # (a clone of depth one)
     made = provenance.made()
     assert made["commit"] == provenance.commit() and made["at"]
+
+
+def test_a_solvers_runs_are_decided_by_its_own_numerics_and_the_common_sources():
+    """A change to SMFEM's numerics leaves the reference's runs made from these sources (the two
+    share no numerics), and the other way round; the runner, the study framework and the scenes
+    decide every run."""
+    reference, smfem = provenance.sources_of(("reference_fem",)), provenance.sources_of(("smfem",))
+    assert "reference_fem" in reference and "smfem" not in reference and "reference_fem" not in smfem
+    for common in ("cases", "smfem/runs", "smfem/studies", "pyproject.toml"):
+        assert common in reference and common in smfem
+    assert set(reference) | set(smfem) <= set(provenance.SOURCES) | set(provenance.COMMON)

@@ -215,7 +215,6 @@ class RunCache:
         return _read(job, outcome.status, outcome.message, path)
 
 
-
 def made_of(run: Run) -> dict:
     """What ``run``'s entry records of its making (:func:`smfem.studies.provenance.made`; empty
     for a run not stored, or stored before it was recorded)."""

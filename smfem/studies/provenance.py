@@ -3,11 +3,11 @@
 The run cache keys a run by a hash of the sources its results depend on, so a report may take a
 run made by an earlier commit whose numerics are the same. A published report says how many of
 its runs were made from the sources it was made with (``run.json``): one made "from nothing at
-the final commit" has every run made by a commit whose :data:`SOURCES` (what decides the runs)
-equal that commit's,
-whether by one pass of the command or by several into the same new cache (a full report can
-outlast a working session; a stopped pass leaves its finished runs stored, and a commit of
-README alone between two passes changes no source).
+the final commit" has every run made by a commit whose sources of that run
+(:func:`sources_of`: its solver's package, the scenes, the runner and the study framework) equal
+that commit's, whether by one pass of the command or by several into the same new cache (a full
+report can outlast a working session; a stopped pass leaves its finished runs stored, and a
+commit of README alone between two passes changes no source).
 """
 
 from __future__ import annotations
@@ -23,6 +23,16 @@ ROOT = Path(__file__).resolve().parents[2]
 #: (its pages, ``reports/``, are written by the last pass from the last sources whatever made the
 #: runs; the tests and docs decide nothing)
 SOURCES = ("smfem", "reference_fem", "cases", "pyproject.toml")
+#: what decides every run besides its solver's packages: the scenes, the runner that calls the
+#: solver and measures it, the study framework that plans and executes it, the dependencies
+COMMON = ("cases", "smfem/runs", "smfem/studies", "pyproject.toml")
+
+
+def sources_of(packages: tuple[str, ...]) -> tuple[str, ...]:
+    """The :data:`SOURCES` that decide a run of a solver whose numerics are ``packages`` (dotted,
+    :attr:`smfem.runs.registry.Solver.packages`): a change to SMFEM's numerics leaves the
+    reference's runs made from these sources, and the other way round (the two share no numerics)."""
+    return tuple(sorted({p.replace(".", "/") for p in packages} | set(COMMON)))
 
 
 def _git(*args) -> str:
@@ -43,13 +53,14 @@ def commit() -> str | None:
 
 
 @functools.cache
-def same_sources(made_by: str | None) -> bool:
-    """Whether a run recorded as made by commit ``made_by`` came from the :data:`SOURCES` that this
-    checkout has now (a commit with changes, or none, is never known to)."""
+def same_sources(made_by: str | None, paths: tuple[str, ...] = SOURCES) -> bool:
+    """Whether a run recorded as made by commit ``made_by`` came from the ``paths`` (default: all
+    :data:`SOURCES`; one solver's: :func:`sources_of`) that this checkout has now (a commit with
+    changes, or none, is never known to)."""
     if not made_by or "+" in made_by:
         return False
     try:
-        _git("diff", "--quiet", made_by, "--", *SOURCES)
+        _git("diff", "--quiet", made_by, "--", *paths)
     except (OSError, subprocess.SubprocessError):
         return False  # they differ (exit 1), or the commit is unknown here
     return True

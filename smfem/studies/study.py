@@ -41,8 +41,11 @@ class CaseRuns:
     carried: dict = field(default_factory=dict)
 
     def all_runs(self) -> list[Run]:
-        return [r for runs in self.series.values() for r in runs] + [r for r in (self.reference,) if r is not None] + [
-            *self.truth_runs.values()]
+        """Every stored run the case read: its series, the same-dt reference, the fields run,
+        the truth's runs and the error estimates' runs."""
+        return [*(r for runs in self.series.values() for r in runs),
+                *(r for r in (self.reference, self.fields) if r is not None), *self.truth_runs.values(),
+                *(run for run, _ in self.estimates.values() if run is not None)]
 
 
 @dataclass
