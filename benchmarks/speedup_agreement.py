@@ -2,7 +2,7 @@
 one cache (issue 59's must-show: within 10 % on every measured speed-up), or two reports.
 
     python benchmarks/speedup_agreement.py A/tables/headline.csv B/tables/headline.csv [--within 0.1]
-    python benchmarks/speedup_agreement.py --retime DIR [--quick | --full]   # two retimes of DIR, one after the other
+    python benchmarks/speedup_agreement.py --retime DIR [--full]   # two retimes of DIR (a quick report unless --full), one after the other
     python benchmarks/speedup_agreement.py --tiny   # the published full report's table against itself
 
 A measured speed-up is a ratio ("12.3x"); a bound ("> 7.7x"), "neither reaches it" and the like
