@@ -140,8 +140,9 @@ def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = No
     for table in side:
         table.result()
     # after the study's runs and the side tables: the pass runs alone on the executor
-    timed = (time_headline(analyses, timing, progress, log=out / "timing-pass.jsonl")
-             if timing is not None else None)
+    (out / "tables").mkdir(parents=True, exist_ok=True)
+    timed = (time_headline(analyses, timing, progress, log=out / "timing-pass.jsonl",
+                           repeats=out / "tables" / "timing_repeats.csv") if timing is not None else None)
     tables = write_tables(analyses, out / "tables", timed)
     if document:
         ctx = ReportContext(analyses, tables, figs, study, settings, out, overall)

@@ -268,5 +268,7 @@ def write_tables(analyses: list[CaseAnalysis], out: Path, timing: pd.DataFrame |
         f"  {RULE.repeats} repeats and {RULE.total_s:g} CPU s in all (a run over {RULE.long_s:g} s: once, twice "
         "within the pass's budget): repeats,\n"
         "  cpu_min_s (the headline's), cpu_median_s, cpu_max_s and study_cpu_s (the study's single shot, as\n"
-        "  runs.csv and fronts.csv keep it); smfem report --retime makes it again\n")
+        "  runs.csv and fronts.csv keep it); smfem report --retime makes it again\n"
+        "timing_repeats.csv: every repeat of that pass in the order taken (case, solver, label, batch, repeat,\n"
+        "  cpu_s) and when its batch ended (UTC): how the host's speed moved during the pass\n")
     return tables

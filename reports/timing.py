@@ -14,6 +14,7 @@ whose shot is several times the other's keeps its shot, as its row's cost, outsi
 from __future__ import annotations
 
 import json
+import time
 from dataclasses import asdict, replace
 from itertools import zip_longest
 from pathlib import Path
@@ -31,6 +32,8 @@ from smfem.studies.timing import Timing, TimingRule, in_one_worker, retime
 from .analysis import CaseAnalysis
 
 COLUMNS = ["case", "solver", "target", "label", "repeats", "cpu_min_s", "cpu_median_s", "cpu_max_s", "study_cpu_s"]
+#: ``tables/timing_repeats.csv``: every repeat of the pass in the order taken, when its batch ended
+REPEAT_COLUMNS = ["case", "solver", "label", "batch", "repeat", "cpu_s", "batch_ended"]
 
 
 def decisive(an: CaseAnalysis) -> dict[tuple[str, float], Run]:
@@ -98,12 +101,14 @@ class PassLog:
     def __init__(self, path: Path, rule: TimingRule, run=in_one_worker):
         self.path, self.run = Path(path), run
         self.header = {"rule": asdict(rule), "boot": boot(), "commit": provenance.commit()}
-        self.logged: dict[str, list[list[float]]] = {}
+        self.logged: dict[str, list[dict]] = {}
+        #: the pass's batches in the order it asked for them (logged ones replayed among them)
+        self.batches: list[dict] = []
         lines = self.path.read_text().splitlines() if self.path.exists() else []
         if lines and self._resumable(json.loads(lines[0])):
             for line in lines[1:]:
                 entry = json.loads(line)
-                self.logged.setdefault(entry["job"], []).append(entry["times"])
+                self.logged.setdefault(entry["job"], []).append(entry)
         else:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self.path.write_text(json.dumps(self.header) + "\n")
@@ -115,29 +120,40 @@ class PassLog:
     @property
     def resumed(self) -> int:
         """How many logged repeats this pass takes up."""
-        return sum(len(t) for batches in self.logged.values() for t in batches)
+        return sum(len(entry["times"]) for batches in self.logged.values() for entry in batches)
 
     def __call__(self, job, repeats: int) -> list[float]:
         """``repeats`` CPU times of ``job``: its next logged batch, else measured and logged."""
         key = json.dumps(key_of(job), sort_keys=True, default=str)
         batches = self.logged.get(key)
         if batches:
-            return batches.pop(0)
-        times = self.run(job, repeats)
-        with self.path.open("a") as f:
-            f.write(json.dumps({"job": key, "times": times}) + "\n")
-        return times
+            entry = batches.pop(0)
+        else:
+            entry = {"job": key, "times": self.run(job, repeats), "ended": time.strftime("%Y-%m-%d %H:%M:%S UTC",
+                                                                                          time.gmtime())}
+            with self.path.open("a") as f:
+                f.write(json.dumps(entry) + "\n")
+        self.batches.append(dict(entry, of=job))
+        return entry["times"]
+
+    def repeats(self, label) -> pd.DataFrame:
+        """Every repeat taken, in order (:data:`REPEAT_COLUMNS`); ``label(job) -> (case, solver, label)``."""
+        rows = [(*label(b["of"]), n, i + 1, t, b.get("ended", "")) for n, b in enumerate(self.batches, 1)
+                for i, t in enumerate(b["times"])]
+        return pd.DataFrame(rows, columns=REPEAT_COLUMNS)
 
     def finish(self) -> None:
         self.path.unlink(missing_ok=True)
 
 
 def time_headline(analyses: list[CaseAnalysis], rule: TimingRule = TimingRule(), progress: bool = True,
-                  log: Path | None = None, **retime_options) -> pd.DataFrame:
+                  log: Path | None = None, repeats: Path | None = None, **retime_options) -> pd.DataFrame:
     """Time every scene's decisive runs again and put each minimum in its cost (and the timing in
     ``an.timings``): the headline made after this holds ratios of minima. Returns the rows of
     ``tables/timing.csv``; ``log``: where the pass keeps its repeats until it finishes
-    (:class:`PassLog`); ``retime_options``: :func:`smfem.studies.timing.retime`'s ``run``."""
+    (:class:`PassLog`), and ``repeats`` where it then writes each of them in the order taken,
+    with when its batch ended (``tables/timing_repeats.csv``: what the host did during the
+    pass); ``retime_options``: :func:`smfem.studies.timing.retime`'s ``run``."""
     chosen = {an.case.name: contenders(decisive(an), rule.rivals) for an in analyses}
     timed = [[run for run in runs.values() if not rule.kept(study_shot(run))] for runs in chosen.values()]
     passlog = PassLog(log, rule, retime_options.pop("run", in_one_worker)) if log is not None else None
@@ -147,6 +163,10 @@ def time_headline(analyses: list[CaseAnalysis], rule: TimingRule = TimingRule(),
             print(f"timing: resuming the pass stopped after {passlog.resumed} repeats ({log})", flush=True)
     timings = retime([interleaved(runs) for runs in timed if runs], rule, progress=progress, **retime_options)
     if passlog is not None:
+        if repeats is not None:
+            named = {run.job: (an.case.name, solver, run.label) for an in analyses
+                     for (solver, _), run in chosen[an.case.name].items()}
+            passlog.repeats(named.__getitem__).to_csv(repeats, index=False)
         passlog.finish()
     timings |= {run.job: Timing(run.job, (study_shot(run),), retimed=False) for runs in chosen.values()
                 for run in runs.values() if rule.kept(study_shot(run))}

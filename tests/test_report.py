@@ -17,7 +17,7 @@ from smfem.studies import metrics
 from smfem.studies.metrics import TARGETS
 from reports.analysis import analyse
 from reports.build import build
-from reports.timing import COLUMNS
+from reports.timing import COLUMNS, REPEAT_COLUMNS, timed_runs
 from smfem.studies.cache import Run, RunCache
 from smfem.runs.registry import CALCULIX_EXPLICIT, CALCULIX_MODAL, REF3D_EXPLICIT, headline_name, lookup
 from smfem.studies.jobs import NOT_AVAILABLE, NOT_INSTALLED, Job, execute
@@ -855,6 +855,14 @@ def test_the_report_times_its_decisive_runs_again_and_its_speedups_are_ratios_of
     check_timing(tiny.tables)
     written = pd.read_csv(tiny.out / "tables" / "timing.csv")
     assert list(written.columns) == COLUMNS and len(written) == len(tiny.tables["timing"])
+    # every repeat in the order taken, with when its batch ended: its count and least per run are timing.csv's
+    repeats = pd.read_csv(tiny.out / "tables" / "timing_repeats.csv")
+    assert list(repeats.columns) == REPEAT_COLUMNS and repeats.batch.is_monotonic_increasing
+    per_run = repeats.groupby(["case", "solver", "label"]).cpu_s.agg(["count", "min"])
+    for r in timed_runs(written).itertuples():
+        if r.repeats:
+            assert per_run.loc[(r.case, r.solver, r.label)].tolist() == pytest.approx([r.repeats, r.cpu_min_s], rel=1e-5)
+    assert repeats.batch_ended.str.fullmatch(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d UTC").all()
     # the study's single shots stay where they were: runs.csv and fronts.csv
     fronts = tiny.tables["fronts"]
     shots = {(r.case, r.solver, r.level): r.cpu_s for r in fronts.itertuples()}
