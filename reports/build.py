@@ -23,6 +23,7 @@ from .sections import ReportContext
 from smfem.studies.study import StudyResult, run_study
 from smfem.studies.timing import TimingRule
 from .tables import effectivity_table, write_tables
+from .host_gate import WAITS, HostGate
 from .timing import time_headline
 from .view3d import render_field
 from . import verification
@@ -105,7 +106,7 @@ SIDE_TABLES = (code_verification_table, stability_table)
 
 def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = None, workers: int = 2,
           progress: bool = True, settings: str = "quick", document: bool = True,
-          timing: TimingRule | None = TimingRule(), retime: bool = False) -> Report:
+          timing: TimingRule | None = TimingRule(), retime: bool = False, host_waits: int | None = None) -> Report:
     """Run (or reuse) the plan's runs, time the decisive ones again (``timing``) and write
     ``tables/*.csv``, ``figures/``, ``fields/`` and, with ``document``, ``index.html`` and
     ``report.pdf`` into ``out``.
@@ -121,6 +122,10 @@ def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = No
     retime : redo only the timing pass on ``out``'s earlier build: every run from the cache
         (:class:`smfem.studies.study.NotInCache` otherwise), no figure drawn again; the tables
         and the document written anew
+    host_waits : how many times a batch of the pass may wait for a quiet host
+        (:class:`reports.host_gate.HostGate`); None: :data:`~reports.host_gate.WAITS` for a full
+        report or a retime, none for a quick one, whose wall time is bounded (its probes are
+        still recorded)
     """
     wall0 = time.perf_counter()
     out = Path(out)
@@ -141,8 +146,10 @@ def build(plan, out: Path, cache: Path | None = None, scheduler: str | None = No
         table.result()
     # after the study's runs and the side tables: the pass runs alone on the executor
     (out / "tables").mkdir(parents=True, exist_ok=True)
+    waits = host_waits if host_waits is not None else (WAITS if settings == "full" or retime else 0)
     timed = (time_headline(analyses, timing, progress, log=out / "timing-pass.jsonl",
-                           repeats=out / "tables" / "timing_repeats.csv") if timing is not None else None)
+                           repeats=out / "tables" / "timing_repeats.csv", run=HostGate(waits=waits))
+             if timing is not None else None)
     tables = write_tables(analyses, out / "tables", timed)
     if document:
         ctx = ReportContext(analyses, tables, figs, study, settings, out, overall)

@@ -30,10 +30,11 @@ from smfem.studies.plan import SMFEM
 from smfem.studies.timing import Timing, TimingRule, in_one_worker, retime
 
 from .analysis import CaseAnalysis
+from .host_gate import HostGate
 
 COLUMNS = ["case", "solver", "target", "label", "repeats", "cpu_min_s", "cpu_median_s", "cpu_max_s", "study_cpu_s"]
 #: ``tables/timing_repeats.csv``: every repeat of the pass in the order taken, when its batch ended
-REPEAT_COLUMNS = ["case", "solver", "label", "batch", "repeat", "cpu_s", "batch_ended"]
+REPEAT_COLUMNS = ["case", "solver", "label", "batch", "repeat", "cpu_s", "batch_ended", "host_probe_s", "host_waits"]
 
 
 def decisive(an: CaseAnalysis) -> dict[tuple[str, float], Run]:
@@ -130,7 +131,9 @@ class PassLog:
             entry = batches.pop(0)
         else:
             entry = {"job": key, "times": self.run(job, repeats), "ended": time.strftime("%Y-%m-%d %H:%M:%S UTC",
-                                                                                          time.gmtime())}
+                                                                                          time.gmtime()),
+                     # the host's memory speed before the batch, where the run waits for it (HostGate)
+                     "probe_s": getattr(self.run, "last_probe", None), "waits": getattr(self.run, "last_waits", None)}
             with self.path.open("a") as f:
                 f.write(json.dumps(entry) + "\n")
         self.batches.append(dict(entry, of=job))
@@ -138,8 +141,8 @@ class PassLog:
 
     def repeats(self, label) -> pd.DataFrame:
         """Every repeat taken, in order (:data:`REPEAT_COLUMNS`); ``label(job) -> (case, solver, label)``."""
-        rows = [(*label(b["of"]), n, i + 1, t, b.get("ended", "")) for n, b in enumerate(self.batches, 1)
-                for i, t in enumerate(b["times"])]
+        rows = [(*label(b["of"]), n, i + 1, t, b.get("ended", ""), b.get("probe_s"), b.get("waits"))
+                for n, b in enumerate(self.batches, 1) for i, t in enumerate(b["times"])]
         return pd.DataFrame(rows, columns=REPEAT_COLUMNS)
 
     def finish(self) -> None:
@@ -151,12 +154,13 @@ def time_headline(analyses: list[CaseAnalysis], rule: TimingRule = TimingRule(),
     """Time every scene's decisive runs again and put each minimum in its cost (and the timing in
     ``an.timings``): the headline made after this holds ratios of minima. Returns the rows of
     ``tables/timing.csv``; ``log``: where the pass keeps its repeats until it finishes
-    (:class:`PassLog`), and ``repeats`` where it then writes each of them in the order taken,
-    with when its batch ended (``tables/timing_repeats.csv``: what the host did during the
-    pass); ``retime_options``: :func:`smfem.studies.timing.retime`'s ``run``."""
+    (:class:`PassLog`; each batch then waits for a quiet host, :class:`~reports.host_gate.HostGate`),
+    and ``repeats`` where it then writes each of them in the order taken, with when its batch
+    ended and the host's memory probe before it (``tables/timing_repeats.csv``: what the host
+    did during the pass); ``retime_options``: :func:`smfem.studies.timing.retime`'s ``run``."""
     chosen = {an.case.name: contenders(decisive(an), rule.rivals) for an in analyses}
     timed = [[run for run in runs.values() if not rule.kept(study_shot(run))] for runs in chosen.values()]
-    passlog = PassLog(log, rule, retime_options.pop("run", in_one_worker)) if log is not None else None
+    passlog = PassLog(log, rule, retime_options.pop("run", None) or HostGate(waits=0)) if log is not None else None
     if passlog is not None:
         retime_options["run"] = passlog
         if passlog.resumed and progress:

@@ -863,6 +863,7 @@ def test_the_report_times_its_decisive_runs_again_and_its_speedups_are_ratios_of
         if r.repeats:
             assert per_run.loc[(r.case, r.solver, r.label)].tolist() == pytest.approx([r.repeats, r.cpu_min_s], rel=1e-5)
     assert repeats.batch_ended.str.fullmatch(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d UTC").all()
+    assert (repeats.host_probe_s > 0).all() and (repeats.host_waits >= 0).all()  # the host, probed before each batch
     # the study's single shots stay where they were: runs.csv and fronts.csv
     fronts = tiny.tables["fronts"]
     shots = {(r.case, r.solver, r.level): r.cpu_s for r in fronts.itertuples()}
@@ -872,7 +873,7 @@ def test_the_report_times_its_decisive_runs_again_and_its_speedups_are_ratios_of
 
 def test_retime_runs_nothing_but_the_timing_pass_and_writes_timing_again(tiny, tmp_path):
     again = build(TINY, tmp_path / "again", cache=tiny.out / "runs", progress=False, settings="tiny",
-                  document=False, retime=True, timing=LIGHT_TIMING)
+                  document=False, retime=True, timing=LIGHT_TIMING, host_waits=0)
     assert again.study.executed == []
     check_timing(again.tables)
     first, second = tiny.tables["timing"], again.tables["timing"]

@@ -145,3 +145,19 @@ def test_a_stopped_pass_resumes_from_its_log_and_a_log_of_another_boot_or_source
         assert timing.PassLog(path, other_rule, run).resumed == 0
         monkeypatch.setattr(timing, "boot", lambda: "boot-1")
         monkeypatch.setattr(timing.provenance, "commit", lambda: "abc")
+
+
+def test_a_batch_waits_for_the_hosts_memory_speed_to_come_back_within_the_slack():
+    """reports.host_gate.HostGate: a batch is timed once the memory probe is within 10 % of the
+    best the pass has seen, after waiting out a slow spell (at most ``waits`` times)."""
+    from reports.host_gate import HostGate, memory_probe
+
+    probes, slept, ran = iter([1.0, 1.5, 1.3, 1.05, 2.0, 2.0, 2.0]), [], []
+    gate = HostGate(run=lambda job, n: ran.append((job, n)) or [0.5] * n, waits=2, wait_s=20.0,
+                    probe=lambda: next(probes), sleep=slept.append)
+    assert gate("a", 3) == [0.5] * 3 and (gate.last_probe, gate.last_waits, slept) == (1.0, 0, [])
+    assert gate("b", 1) == [0.5] and (gate.last_probe, gate.last_waits, slept) == (1.05, 2, [20.0, 20.0])
+    # a spell longer than the waits: the batch is timed anyway, and its probe says so
+    assert gate("c", 2) == [0.5] * 2 and (gate.last_probe, gate.last_waits) == (2.0, 2) and len(slept) == 4
+    assert ran == [("a", 3), ("b", 1), ("c", 2)] and gate.best == 1.0
+    assert 0 < memory_probe(1) < 1.0  # the real probe: a stream through 64 MB and back

@@ -1,0 +1,71 @@
+"""Time a run only while the host is quiet: a probe of its memory speed before each batch of the
+timing pass (:mod:`reports.timing`).
+
+On a shared machine a neighbour that takes memory bandwidth slows a memory-bound run (sparse
+solves, conjugate gradients) more than a compute-bound one, so the two sides of a speed-up move
+apart: two retimes of one quick report disagreed by 32.5 % on the notched cylinder, whose 2D
+reference (CG) took 26.7 CPU s at its least over four repeats in one pass, 18.0 in the other,
+and 19.9-21.2 s four times in a row on an idle host, while SMFEM's run stayed at 6.7 s. Before
+each batch the worker streams a fixed array through memory (:func:`memory_probe`); where that
+takes more than :attr:`HostGate.slack` over the least the pass has seen, the pass waits and
+probes again, up to :attr:`HostGate.waits` times, then times the batch anyway. Each batch's
+probe goes into ``tables/timing_repeats.csv``, so what the host did stays on record.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from smfem.studies.executors import in_worker
+from smfem.studies.timing import in_one_worker
+
+#: floats streamed by the probe: 32 MB a pass, past the caches of this machine's cores
+PROBE_FLOATS = 4_000_000
+#: how many times a batch waits for a quiet host (:class:`HostGate`) in a full report or a retime
+WAITS = 6
+
+
+def memory_probe(passes: int = 4) -> float:
+    """CPU s of ``passes`` in-place additions of two arrays of :data:`PROBE_FLOATS`, the least of
+    three: the time a stream through memory takes now (a core stalled on memory still counts
+    its CPU time, as the runs' CPU times do)."""
+    a, b = np.ones(PROBE_FLOATS), np.ones(PROBE_FLOATS)
+    best = math.inf
+    for _ in range(3):
+        t = time.process_time()
+        for _ in range(passes):
+            np.add(a, b, out=a)
+        best = min(best, time.process_time() - t)
+    return best
+
+
+def in_the_timing_worker(fn, *args):
+    """``fn(*args)`` in the worker the pass times its runs in (:func:`in_one_worker`'s)."""
+    return in_worker(fn, *args, workers=1).result()
+
+
+class HostGate:
+    """``run(job, repeats)`` (:func:`in_one_worker`) once the host's memory speed is within
+    ``slack`` of the best probe so far, waiting ``wait_s`` between probes at most ``waits`` times;
+    ``probe`` and ``sleep`` stand in for the worker's probe and the clock in tests."""
+
+    def __init__(self, run=in_one_worker, slack: float = 0.10, waits: int = WAITS, wait_s: float = 20.0,
+                 probe=lambda: in_the_timing_worker(memory_probe), sleep=time.sleep):
+        self.run, self.slack, self.waits, self.wait_s = run, slack, waits, wait_s
+        self.probe, self.sleep = probe, sleep
+        self.best = math.inf
+        #: the probe (CPU s) before the last batch, and how many times it waited
+        self.last_probe, self.last_waits = math.nan, 0
+
+    def __call__(self, job, repeats: int) -> list[float]:
+        for waited in range(self.waits + 1):
+            probe = self.probe()
+            self.best = min(self.best, probe)
+            if probe <= self.best * (1 + self.slack) or waited == self.waits:
+                break
+            self.sleep(self.wait_s)
+        self.last_probe, self.last_waits = probe, waited
+        return self.run(job, repeats)
