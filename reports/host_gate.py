@@ -26,6 +26,9 @@ from smfem.studies.timing import in_one_worker
 PROBE_FLOATS = 4_000_000
 #: how many times a batch waits for a quiet host (:class:`HostGate`) in a full report or a retime
 WAITS = 6
+#: the most a whole pass waits, s: a host that stays slow (or a best probe that was luck) must not
+#: hold a full report's pass for hours; beyond it the probes are still recorded
+WAIT_BUDGET_S = 1800.0
 
 
 def memory_probe(passes: int = 4) -> float:
@@ -49,14 +52,16 @@ def in_the_timing_worker(fn, *args):
 
 class HostGate:
     """``run(job, repeats)`` (:func:`in_one_worker`) once the host's memory speed is within
-    ``slack`` of the best probe so far, waiting ``wait_s`` between probes at most ``waits`` times;
-    ``probe`` and ``sleep`` stand in for the worker's probe and the clock in tests."""
+    ``slack`` of the best probe so far, waiting ``wait_s`` between probes at most ``waits`` times
+    a batch and ``budget_s`` in all; ``probe`` and ``sleep`` stand in for the worker's probe and
+    the clock in tests."""
 
     def __init__(self, run=in_one_worker, slack: float = 0.10, waits: int = WAITS, wait_s: float = 20.0,
-                 probe=lambda: in_the_timing_worker(memory_probe), sleep=time.sleep):
-        self.run, self.slack, self.waits, self.wait_s = run, slack, waits, wait_s
+                 budget_s: float = WAIT_BUDGET_S, probe=lambda: in_the_timing_worker(memory_probe),
+                 sleep=time.sleep):
+        self.run, self.slack, self.waits, self.wait_s, self.budget_s = run, slack, waits, wait_s, budget_s
         self.probe, self.sleep = probe, sleep
-        self.best = math.inf
+        self.best, self.waited_s = math.inf, 0.0
         #: the probe (CPU s) before the last batch, and how many times it waited
         self.last_probe, self.last_waits = math.nan, 0
 
@@ -64,8 +69,9 @@ class HostGate:
         for waited in range(self.waits + 1):
             probe = self.probe()
             self.best = min(self.best, probe)
-            if probe <= self.best * (1 + self.slack) or waited == self.waits:
+            if probe <= self.best * (1 + self.slack) or waited == self.waits or self.waited_s + self.wait_s > self.budget_s:
                 break
             self.sleep(self.wait_s)
+            self.waited_s += self.wait_s
         self.last_probe, self.last_waits = probe, waited
         return self.run(job, repeats)

@@ -160,4 +160,9 @@ def test_a_batch_waits_for_the_hosts_memory_speed_to_come_back_within_the_slack(
     # a spell longer than the waits: the batch is timed anyway, and its probe says so
     assert gate("c", 2) == [0.5] * 2 and (gate.last_probe, gate.last_waits) == (2.0, 2) and len(slept) == 4
     assert ran == [("a", 3), ("b", 1), ("c", 2)] and gate.best == 1.0
+    # the pass's waiting budget spent, a slow host is timed at once
+    spent = HostGate(run=lambda job, n: [0.5] * n, waits=6, wait_s=20.0, budget_s=50.0,
+                     probe=iter([1.0] + [2.0] * 20).__next__, sleep=slept.append)
+    spent("a", 1), spent("b", 1), spent("c", 1)
+    assert (spent.waited_s, spent.last_waits) == (40.0, 0) and len(slept) == 6
     assert 0 < memory_probe(1) < 1.0  # the real probe: a stream through 64 MB and back
