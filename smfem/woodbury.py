@@ -92,6 +92,7 @@ class CutoutWoodbury:
         lam, Y = np.take_along_axis(lam, order, 1), np.take_along_axis(Y, order[:, None, :], 2)
         F = Y * np.sqrt(np.where(np.take_along_axis(keep, order, 1), lam, 0.0))[:, None, :]  # (nq, 2 dofs, rank)
         self.F = F[:, self.series.source]  # on the series' sorted rows
+        self.Ft = np.ascontiguousarray(self.F.transpose(0, 2, 1))  # (nq, rank, 2 dofs), for V x
         # A_h: the body without cut-outs, block-diagonal
         blocks = model.homogeneous_blocks
         self.base = factorize_spd(stacked_step(blocks, a0))
@@ -165,12 +166,14 @@ class CutoutWoodbury:
         return (scatter @ excess).T.reshape(-1, 2 * n, 2 * n)
 
     def _V(self, x: np.ndarray) -> np.ndarray:
-        """``V x`` (nq, rank) of stacked amplitudes."""
-        return np.einsum("qir,iq->qr", self.F, self.series.values(x), optimize=True)
+        """``V x`` (nq, rank) of stacked amplitudes: one product per point, batched (an
+        ``einsum`` with ``optimize`` sought its path at every call: 0.1 of the notched strip's
+        1.2 CPU s)."""
+        return np.matmul(self.Ft, self.series.values(x).T[:, :, None])[:, :, 0]
 
     def _Vt(self, y: np.ndarray) -> np.ndarray:
         """``V' y`` of ``y`` (nq, rank), stacked amplitudes."""
-        return self.series.project(np.einsum("qir,qr->iq", self.F, y, optimize=True))
+        return self.series.project(np.matmul(self.F, y[:, :, None])[:, :, 0].T)
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         y = self.base.solve(b)
