@@ -100,10 +100,40 @@ def block_diagonal(blocks) -> sp.csr_matrix:
     return sp.csr_matrix((data, indices, indptr), shape=(rows[-1], cols[-1]))
 
 
+#: the largest joined band (bytes) :class:`BlockFactors` keeps beside its blocks' factors, for
+#: solving them all in one call
+JOINED_BAND_BYTES = 64 * 2**20
+
+
+def joined_band(factors: list) -> BandedCholesky | None:
+    """One banded Cholesky factor of the block-diagonal matrix whose blocks ``factors`` are
+    (all :class:`BandedCholesky`; the narrower bands padded with zeros to the widest), or None
+    where a block is not banded or the joined band would pass :data:`JOINED_BAND_BYTES`.
+    A block-diagonal matrix is banded with its widest block's band, and its factor is the
+    blocks' factors side by side: one ``dpbtrs`` then solves every block, where a call per
+    block cost more than its arithmetic (the pulse at 160 harmonics, 41 blocks: 20 us a call,
+    1.34 of the run's 2.5 CPU s)."""
+    if len(factors) < 2 or not all(isinstance(f, BandedCholesky) for f in factors):
+        return None
+    width = max(f.factor.shape[0] for f in factors)
+    sizes = [f.factor.shape[1] for f in factors]
+    if 8 * width * sum(sizes) > JOINED_BAND_BYTES:
+        return None
+    joined = BandedCholesky.__new__(BandedCholesky)
+    joined.factor = np.zeros((width, sum(sizes)), order="F")
+    offsets = np.cumsum([0] + sizes)
+    for f, a, b in zip(factors, offsets[:-1], offsets[1:]):
+        joined.factor[width - f.factor.shape[0]:, a:b] = f.factor
+    joined.perm = np.concatenate([f.perm + a for f, a in zip(factors, offsets[:-1])])
+    return joined
+
+
 class BlockFactors:
     """Factors of a block-diagonal matrix, one per diagonal block, ``solve(b)`` block by block:
     a block's factorization takes its own unknowns' memory and fill only, never a copy of the
-    whole matrix; ``factors``, each block's; ``nbytes``, what they hold.
+    whole matrix; ``factors``, each block's; ``nbytes``, what they hold. Where every block is
+    banded and small, their bands are also joined into one (:func:`joined_band`), which solves
+    them all in one call.
 
     Parameters
     ----------
@@ -119,8 +149,13 @@ class BlockFactors:
             self.nbytes += factor_bytes(self.factors[-1], A.dtype.itemsize)
             sizes.append(A.shape[0])
         self.offsets = np.cumsum(sizes)
+        self.joined = joined_band(self.factors)
+        if self.joined is not None:
+            self.nbytes += self.joined.factor.nbytes
 
     def solve(self, b: np.ndarray) -> np.ndarray:
+        if self.joined is not None:
+            return self.joined.solve(b)
         return np.concatenate([f.solve(b[a:c]) for f, a, c in zip(self.factors, self.offsets[:-1], self.offsets[1:])])
 
 
