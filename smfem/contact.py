@@ -288,6 +288,8 @@ class ContactLayer:
         self._rows = R.ravel()  # position in the stacked face vector of every point's dofs
         self._scatter = (R[:, None, :, :, None] * (n_modes * nF) + R[None, :, :, None, :]).ravel()
         self.size = n_modes * nF
+        # the tangent of the last states asked (:meth:`D`), and their key
+        self._tangent, self._tangent_key = None, None
 
     def _side(self, spec: LayerSide) -> tuple[LayerPoints, np.ndarray, np.ndarray]:
         """The layer elements on one face: their points, the nodes of ``B``'s columns at each
@@ -341,7 +343,7 @@ class ContactLayer:
         for its stresses and its matrix: the rod impact's 1810 tangents were 0.09 of its 0.44
         CPU s); callers do not write into it."""
         key = states.key()
-        if key != getattr(self, "_tangent_key", None):
+        if key != self._tangent_key:
             self._tangent, self._tangent_key = layer_tangent(states, self.E, self.G, self.f), key
         return self._tangent
 
