@@ -49,6 +49,10 @@ def test_calculix_procedures_share_one_headline_row_at_their_cheapest():
     strip = head.loc["strip", CALCULIX]
     assert (strip.cpu_s_to_1pct, strip.cpu_s_to_5pct) == ("not reached (best 3 %, explicit)", "20 (explicit r1)")
     assert plastic.left_out() == [f"CalculiX modal: {REFUSED}"] and elastic.left_out() == []
+    from reports.verdict import summary_table  # the README's table: CalculiX's cheapest procedure named
+
+    assert summary_table(head.reset_index())[2:] == ["| dome | 1 % | 2 | 4 | - | 5 (modal) |",
+                                                     "| strip | 5 % | 1 | - | - | 20 (explicit) |"]
 
 
 def test_a_row_of_refused_procedures_says_the_first_reason_and_lists_the_others():
@@ -82,7 +86,7 @@ def test_the_3d_row_is_the_cheaper_engine_at_each_target_named_in_its_cell_and_t
     assert (row.smfem_speedup_1pct, row.smfem_speedup_5pct, row.runs) == ("30x", "6x", 6)
     assert sentence("thick_cylinder", head.set_index("solver")).endswith(
         ": 30 times faster than the 3D reference (explicit).")
-    assert summary_table(head)[2] == "| thick_cylinder | 1 % | 2 | - | 30 (explicit) |"
+    assert summary_table(head)[2] == "| thick_cylinder | 1 % | 2 | - | 30 (explicit) | - |"
     from smfem.cli.study import headline_lines
 
     assert headline_lines(head)[0].endswith("; speed-up over reference-3d 30x (explicit)")
@@ -91,11 +95,11 @@ def test_the_3d_row_is_the_cheaper_engine_at_each_target_named_in_its_cell_and_t
                          _series(REF3D, ("r2", 40.0, 0.009)), _series(REF3D_EXPLICIT, ("r2", 300.0, 0.0095)))
     cells = headline_table([implicit]).set_index("solver").loc[REF3D]
     assert cells.cpu_s_to_1pct == "40 (implicit r2)" and cells.smfem_speedup_1pct == "20x"
-    assert summary_table(headline_table([implicit]))[2] == "| dome | 1 % | 2 | - | 20 (implicit) |"
+    assert summary_table(headline_table([implicit]))[2] == "| dome | 1 % | 2 | - | 20 (implicit) | - |"
     assert names_an_engine(head, REF3D) and not names_an_engine(head, SMFEM)
     # a table written before the explicit engine (no engine in its cells) reads as it did
     old = head.assign(cpu_s_to_1pct="98.6 (r3 dt2.5e-06)", cpu_s_to_5pct="4.49 (r1 dt1e-05)")
-    assert summary_table(old)[2].endswith("| 30 |") and not names_an_engine(old, REF3D)
+    assert summary_table(old)[2].endswith("| 30 | - |") and not names_an_engine(old, REF3D)
 
 
 def test_an_engine_that_cannot_take_a_scene_keeps_its_line_beside_the_3d_row():
