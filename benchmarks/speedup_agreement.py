@@ -7,7 +7,9 @@ one cache (issue 59's must-show: within 10 % on every measured speed-up), or two
 
 A measured speed-up is a ratio ("12.3x"); a bound ("> 7.7x"), "neither reaches it" and the like
 are not measured and are listed only where the two tables differ. Prints one line per speed-up
-and the largest relative difference, B over A.
+and the largest relative difference, B over A. After two retimes, also the runs whose least CPU
+moved by more than the agreement asked, each with the median memory probe before its batches in
+either pass (``tables/timing_repeats.csv``, ``host_probe_s``): whether the host moved under it.
 """
 
 from __future__ import annotations
@@ -48,13 +50,30 @@ def compare(a: pd.DataFrame, b: pd.DataFrame) -> tuple[list[str], float, int]:
     return lines, worst, measured
 
 
+def moved_runs(a: pd.DataFrame, b: pd.DataFrame, within: float) -> list[str]:
+    """Lines ``case solver label: least A -> B s (+d %), probe median A -> B ms`` of the runs in
+    both ``timing_repeats`` tables whose least CPU moved by more than ``within``, most moved first."""
+    def per_run(repeats: pd.DataFrame) -> pd.DataFrame:
+        return repeats.groupby(["case", "solver", "label"]).agg(least=("cpu_s", "min"), probe=("host_probe_s", "median"),
+                                                                 repeats=("cpu_s", "size"))
+
+    both = per_run(a).join(per_run(b), lsuffix="_a", rsuffix="_b", how="inner")
+    both["change"] = both.least_b / both.least_a - 1
+    moved = both[both.change.abs() > within].sort_values("change", key=abs, ascending=False)
+    return [f"{' '.join(key)}: least {r.least_a:.3g} -> {r.least_b:.3g} s ({100 * r.change:+.1f} %, "
+            f"{int(r.repeats_a)} and {int(r.repeats_b)} repeats), probe median {1e3 * r.probe_a:.1f} -> {1e3 * r.probe_b:.1f} ms"
+            for key, r in moved.iterrows()]
+
+
 def retime_twice(out: Path, settings: str) -> tuple[Path, Path]:
-    """Two ``smfem report --retime`` passes of ``out``, one after the other; their headline tables kept."""
+    """Two ``smfem report --retime`` passes of ``out``, one after the other; their headline tables
+    kept, and their repeats (``timing_repeats-retimeN.csv``) beside them."""
     kept = []
     for n in (1, 2):
         subprocess.run([sys.executable, "-m", "smfem", "report", "--retime", f"--{settings}", "--out", str(out)],
                        check=True)
         kept.append(Path(shutil.copyfile(out / "tables" / "headline.csv", out / f"headline-retime{n}.csv")))
+        shutil.copyfile(out / "tables" / "timing_repeats.csv", out / f"timing_repeats-retime{n}.csv")
     return kept[0], kept[1]
 
 
@@ -78,6 +97,10 @@ def main(argv=None) -> int:
     print("\n".join(lines))
     print(f"{measured} measured speed-ups in both; largest difference {100 * worst:.1f} %: "
           f"{'within' if worst <= args.within else 'NOT within'} {100 * args.within:g} %")
+    if args.retime:
+        repeats = [pd.read_csv(args.retime / f"timing_repeats-retime{n}.csv") for n in (1, 2)]
+        print("runs whose least CPU moved by more than that, and the host's memory probe under them:")
+        print("\n".join(moved_runs(*repeats, args.within)) or "none")
     return 0
 
 
