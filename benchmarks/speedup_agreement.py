@@ -57,7 +57,7 @@ def moved_runs(a: pd.DataFrame, b: pd.DataFrame, within: float) -> list[str]:
         return repeats.groupby(["case", "solver", "label"]).agg(least=("cpu_s", "min"), probe=("host_probe_s", "median"),
                                                                  repeats=("cpu_s", "size"))
 
-    both = per_run(a).join(per_run(b), lsuffix="_a", rsuffix="_b", how="inner")
+    both = per_run(a).merge(per_run(b), left_index=True, right_index=True, suffixes=("_a", "_b"))
     both["change"] = both.least_b / both.least_a - 1
     moved = both[both.change.abs() > within].sort_values("change", key=abs, ascending=False)
     return [f"{' '.join(key)}: least {r.least_a:.3g} -> {r.least_b:.3g} s ({100 * r.change:+.1f} %, "
