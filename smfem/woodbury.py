@@ -92,7 +92,6 @@ class CutoutWoodbury:
         lam, Y = np.take_along_axis(lam, order, 1), np.take_along_axis(Y, order[:, None, :], 2)
         F = Y * np.sqrt(np.where(np.take_along_axis(keep, order, 1), lam, 0.0))[:, None, :]  # (nq, 2 dofs, rank)
         self.F = F[:, self.series.source]  # on the series' sorted rows
-        self.Ft = np.ascontiguousarray(self.F.transpose(0, 2, 1))  # (nq, rank, 2 dofs), for V x
         # A_h: the body without cut-outs, block-diagonal
         blocks = model.homogeneous_blocks
         self.base = factorize_spd(stacked_step(blocks, a0))
@@ -169,7 +168,7 @@ class CutoutWoodbury:
         """``V x`` (nq, rank) of stacked amplitudes: one product per point, batched (an
         ``einsum`` with ``optimize`` sought its path at every call: 0.1 of the notched strip's
         1.2 CPU s)."""
-        return np.matmul(self.Ft, self.series.values(x).T[:, :, None])[:, :, 0]
+        return np.matmul(self.series.values(x).T[:, None, :], self.F)[:, 0, :]
 
     def _Vt(self, y: np.ndarray) -> np.ndarray:
         """``V' y`` of ``y`` (nq, rank), stacked amplitudes."""
