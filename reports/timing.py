@@ -101,7 +101,7 @@ class PassLog:
 
     def __init__(self, path: Path, rule: TimingRule, run=in_one_worker):
         self.path, self.run = Path(path), run
-        self.header = {"rule": asdict(rule), "boot": boot(), "commit": provenance.commit()}
+        self.header = {"rule": asdict(rule), "boot": boot(), "commit": provenance.commit(provenance.SOURCES)}
         self.logged: dict[str, list[dict]] = {}
         #: the pass's batches in the order it asked for them (logged ones replayed among them)
         self.batches: list[dict] = []

@@ -34,7 +34,25 @@ def test_head_made_these_sources_unless_they_changed_and_the_first_commit_did_no
     first = git("rev-list", "--max-parents=0", "HEAD").split()[0]
     assert provenance.same_sources(first) is (first == head and not changed)  # (a clone of depth one)
     made = provenance.made()
-    assert made["commit"] == provenance.commit() and made["at"]
+    assert made["commit"] == provenance.commit(provenance.SOURCES) and made["at"]
+
+
+def test_a_run_is_of_its_commit_whatever_changed_outside_the_sources(monkeypatch):
+    """An edit of README or the docs while a report runs does not make its runs come from no
+    commit; one of the sources does; the report's own commit (run.json) names any change."""
+    status = {"README.md": " M README.md", "smfem": " M smfem/model.py"}
+    for edited in ("README.md", "smfem"):
+        def git(*args, edited=edited):
+            if args[0] == "rev-parse":
+                return "a" * 40
+            paths = args[args.index("--") + 1:] if "--" in args else ()
+            hit = not paths or any(edited == p or edited.startswith(p + "/") for p in paths)
+            return status[edited] if hit else ""
+        monkeypatch.setattr(provenance, "_git", git)
+        provenance.commit.cache_clear()
+        assert provenance.commit() == "a" * 40 + "+changes"
+        assert provenance.made()["commit"] == "a" * 40 + ("+changes" if edited == "smfem" else "")
+    provenance.commit.cache_clear()
 
 
 def test_a_solvers_runs_are_decided_by_its_own_numerics_and_the_common_sources():

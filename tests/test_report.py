@@ -493,13 +493,14 @@ def test_published_findings_are_the_reports_tables_with_its_time_machine_and_pea
     assert made["peak_memory_mb"] == pytest.approx(runs.peak_memory_mb.max(), abs=0.1)
     assert made["runs_executed"] == len(tiny.study.executed) and made["wall_time_s"] > 0
     # which sources made the runs: each run of the tiny report, counted once, recorded as made by
-    # this checkout's commit (from these sources unless the checkout has uncommitted changes)
+    # this checkout's commit (from these sources unless they have uncommitted changes)
     assert made["commit"] == provenance.commit()
     runs = {run.path for case in tiny.study.cases for run in case.all_runs() if run.path is not None}
     if made["commit"] is not None:
         assert re.fullmatch(r"[0-9a-f]{40}(\+changes)?", made["commit"])
-        assert {made_of(Run(None, "", "", path))["commit"] for path in runs} == {made["commit"]}
-        assert made["runs_made_from_these_sources"] == (0 if "+" in made["commit"] else made["runs_stored"])
+        of_sources = provenance.commit(provenance.SOURCES)  # a run names changes to its sources only
+        assert {made_of(Run(None, "", "", path))["commit"] for path in runs} == {of_sources}
+        assert made["runs_made_from_these_sources"] == (0 if "+" in of_sources else made["runs_stored"])
     assert 0 < len(runs) == made["runs_stored"] <= len(tiny.study.executed) + tiny.study.cached
     assert made["runs_made_from"] <= made["runs_made_until"] <= made["finished"]  # when its runs were made
     page = (tmp_path / "pub" / "README.md").read_text()  # the page made of them, and its figure

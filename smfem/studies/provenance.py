@@ -41,12 +41,12 @@ def _git(*args) -> str:
 
 
 @functools.cache
-def commit() -> str | None:
-    """HEAD's hash, with ``+changes`` when tracked files differ from it (the run then comes from
-    no commit), or None outside a git checkout or without git."""
+def commit(paths: tuple[str, ...] = ()) -> str | None:
+    """HEAD's hash, with ``+changes`` when tracked files under ``paths`` (all: empty) differ from
+    it (what they made then comes from no commit), or None outside a git checkout or without git."""
     try:
         head = _git("rev-parse", "HEAD")
-        changed = _git("status", "--porcelain", "--untracked-files=no")
+        changed = _git("status", "--porcelain", "--untracked-files=no", "--", *paths)
     except (OSError, subprocess.SubprocessError):
         return None
     return head + ("+changes" if changed else "")
@@ -67,5 +67,7 @@ def same_sources(made_by: str | None, paths: tuple[str, ...] = SOURCES) -> bool:
 
 
 def made() -> dict:
-    """What a stored run records of its making: the commit and the time."""
-    return {"commit": commit(), "at": time.strftime("%Y-%m-%d %H:%M:%S %Z")}
+    """What a stored run records of its making: the commit and the time. Only :data:`SOURCES`
+    decide a run, so an edit elsewhere (README, the docs, the tests) while a report runs leaves
+    its runs made from the commit."""
+    return {"commit": commit(SOURCES), "at": time.strftime("%Y-%m-%d %H:%M:%S %Z")}
