@@ -43,13 +43,18 @@ def test_the_split_fills_each_quadratic_element_with_positive_linear_ones():
     assert area(quads).reshape(-1, 4).sum(axis=1) == pytest.approx(area(outline), rel=1e-12)
 
 
-def test_the_explicit_deck_names_its_increment_and_the_dt_grid():
+def test_the_explicit_deck_names_its_increment_and_writes_four_times_a_dt():
     case = get_case("thick_cylinder")
     implicit, explicit = build_deck(case, fields=False), build_deck(case, procedure="explicit", fields=False)
     assert explicit.element == "CPE4" and explicit.elements.shape[0] == 4 * implicit.elements.shape[0]
     # the fourth value, the largest increment: ccx 2.20 selects a zero increment without it
     assert f"*DYNAMIC, EXPLICIT\n{case.dt:.13g}, {case.t_end:.13g}, , {case.dt:.13g}" in explicit.text
-    assert "*TIME POINTS, NAME=GRID, GENERATE" in explicit.text and "TIME POINTS=GRID" in explicit.text
+    # ccx 2.20 writes an explicit step's output at every increment whatever TIME POINTS say: the
+    # deck writes every N increments, N from the predicted increment (reference_fem/calculix/courant.py)
+    assert "TIME POINTS" not in explicit.text and explicit.every > 1
+    assert explicit.every * explicit.increment <= case.dt / 4 < (explicit.every + 1) * explicit.increment
+    assert re.findall(r"\*(?:NODE|EL) FILE.*", explicit.text) == [f"*NODE FILE, OUTPUT=2D, FREQUENCY={explicit.every}, "
+                                                                 "NSET=PROBES"]
     # each quadratic face loaded is two linear ones
     assert len(re.findall(r", P\d, ", explicit.text)) == 2 * len(re.findall(r", P\d, ", implicit.text))
     with pytest.raises(UnsupportedCase, match="axisymmetric"):  # ccx's wedges collapse the increment
@@ -151,3 +156,19 @@ def test_a_failed_eigensolve_is_a_failed_run_not_zero_histories():
     goes on with zero modes to zero histories; the run says it did not converge, and why."""
     modal = solve("calculix", get_case("dome", {"t_end": 2e-5}), options={"procedure": "modal", "modes": 200})
     assert not modal.converged and "eigensolver failed" in modal.message
+
+
+@needs_ccx
+@pytest.mark.parametrize("name, params", [("thick_cylinder", {}), ("thick_cylinder", {"dim": 3}),
+                                          ("notched_strip", {}), ("notched_cylinder", {})],
+                         ids=["plane", "solid", "plane-reduced", "solid-reduced"])
+def test_the_predicted_explicit_increment_is_ccxs_or_a_little_above(name, params):
+    """The increment :mod:`reference_fem.calculix.courant` predicts is ccx's own (its output's
+    "SELECTED time increment") or at most 5 % above it, on plane and solid, full and reduced
+    elements: so N increments span at most the dt / 4 asked, and the outputs written (two steps
+    of each case, the end of the step always among them) fall at most dt / 4 apart."""
+    case = get_case(name, {**params, "t_end": 2 * get_case(name).dt})
+    run = solve("calculix", case, options={"procedure": "explicit"})
+    assert run.converged and len(run.t) == 3
+    assert 1.0 <= run.info["predicted_increment"] / run.info["ccx_increment"] < 1.05, run.info
+    assert run.info["output_spacing_dt"] <= 0.25, run.info

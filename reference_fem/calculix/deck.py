@@ -29,6 +29,7 @@ from ..face import plane_face
 from ..frames import AXISYMMETRIC, SOLID, body_point_to_mesh
 from ..mesh import vtk_cells
 from ..model import Model
+from .courant import output_frequency, stable_increment, wave_speed
 from .linear import face_children, split
 from .loads import Amplitudes, force_cards, pressure_cards, refuse_early, serendipity_forces
 from .procedures import EXPLICIT, IMPLICIT, MODAL, MODES, check_modes, element, fixed_increments, linear, refuse, step_cards
@@ -60,6 +61,8 @@ class Deck:
     model : the reference model the deck was made from (supports, mass, faces)
     probe_nodes : probe name -> deck node at the probe point (point probes only)
     procedure : :data:`.procedures.PROCEDURES`
+    increment : the explicit procedure's predicted increment (:mod:`.courant`; 0 for the others)
+    every : increments between the .frd's outputs (an explicit step's from its predicted increment)
     """
 
     text: str
@@ -71,6 +74,8 @@ class Deck:
     probe_nodes: dict = field(default_factory=dict)
     frd_bytes: float = 0.0
     procedure: str = IMPLICIT
+    increment: float = 0.0
+    every: int = 1
 
     @property
     def nodes(self) -> np.ndarray:
@@ -92,11 +97,12 @@ FRD_LINE = (13, 12)
 OWN_INCREMENTS = 1.2
 
 
-def frd_size(case, n_nodes: int, every: int = 1) -> float:
+def frd_size(case, n_nodes: int, every: int = 1, outputs: float | None = None) -> float:
     """Bytes of the .frd the deck makes ccx write (its ``*NODE FILE`` and ``*EL FILE`` blocks,
-    every ``every`` increments): an estimate, for a warning before a long run."""
+    every ``every`` increments, or ``outputs`` times in all): an estimate, for a warning before
+    a long run."""
     blocks = [4, 4, 6, 1] + ([1] if case.material.plastic else []) + ([4] if case.wall is not None else [])
-    increments = case.n_steps * (1.0 if fixed_increments(case) else OWN_INCREMENTS) / every
+    increments = outputs or case.n_steps * (1.0 if fixed_increments(case) else OWN_INCREMENTS) / every
     return increments * n_nodes * sum(FRD_LINE[0] + FRD_LINE[1] * c for c in blocks)
 
 
@@ -136,6 +142,11 @@ def build_deck(case, every: int = 1, procedure: str = IMPLICIT, modes: int | Non
     children = 2**dim if linear(procedure) else 1
     elements = split(cells) if children > 1 else cells[:, : CORNERS[dim]]
     used = np.unique(elements)
+    increment = 0.0
+    if procedure == EXPLICIT:  # ccx writes every increment: every how many to keep, from its increment
+        speed = np.array([wave_speed(m) for m in case.materials])[np.repeat(model.material_index, children)]
+        increment = stable_increment(np.asarray(model.nodes_x, float), elements, speed, name)
+        every *= output_frequency(case.dt, increment)
     if procedure == MODAL:
         check_modes(modes or MODES, used.size * dim - np.isin(model.fixed // dim, used).sum())
     points = np.asarray(model.nodes_x, float)
@@ -178,18 +189,19 @@ def build_deck(case, every: int = 1, procedure: str = IMPLICIT, modes: int | Non
     out += ["*AMPLITUDE, NAME=STEPLOAD", f"0., 1., {case.t_end:.13g}, 1.", *amplitudes.cards()]
     out += step_cards(case, procedure, modes)
     out += loads
-    out += output_cards(case, dim, procedure, every) if fields else probe_output(case, dim, procedure)
+    out += output_cards(case, dim, every) if fields else probe_output(case, dim, every)
     out += ["*END STEP", ""]
+    outputs = case.t_end / (every * increment) if increment else None
     return Deck("\n".join(out), name, points, cells, elements, model, probe_nodes,
-                frd_size(case, used.size, every) if fields else 0.0, procedure)
+                frd_size(case, used.size, every, outputs) if fields else 0.0, procedure, increment, every)
 
 
-def output_cards(case, dim: int, procedure: str, every: int) -> list[str]:
+def output_cards(case, dim: int, every: int) -> list[str]:
     """The fields every ``every`` increments (an exported deck's, for the user's post-processor)
     and the probes' displacements in the .dat."""
     node_out = "U, V" + (", RF" if case.wall is not None else "")
     el_out = "S" + (", PEEQ" if case.material.plastic else "")
-    options = _output_options(dim, procedure) + (f", FREQUENCY={every}" if every > 1 else "")
+    options = _output_options(dim, every)
     out = [f"*NODE FILE{options}", node_out, f"*EL FILE{options}", el_out]
     if any(p.kind == "point" for p in case.probes):
         out += ["*NODE PRINT, NSET=PROBES", "U"]
@@ -200,7 +212,7 @@ def output_cards(case, dim: int, procedure: str, every: int) -> list[str]:
 PROBE_RESULTS = {"u": ("U", True), "v": ("V", True), "sigma": ("S", False), "peps": ("PEEQ", False)}
 
 
-def probe_output(case, dim: int, procedure: str) -> list[str]:
+def probe_output(case, dim: int, every: int = 1) -> list[str]:
     """What the probes read, each result once, on the probes' node set where every probe of it
     is a point probe, else on the whole body: a user timing ccx writes no more."""
     nodal, element_out = {}, {}
@@ -208,7 +220,7 @@ def probe_output(case, dim: int, procedure: str) -> list[str]:
         result, is_nodal = PROBE_RESULTS[probe.field]
         where = nodal if is_nodal else element_out
         where[result] = where.get(result, True) and probe.kind == "point"
-    options = _output_options(dim, procedure)
+    options = _output_options(dim, every)
     out = []
     for card, results in (("*NODE FILE", nodal), ("*EL FILE", element_out)):
         for on_probes in (True, False):
@@ -218,10 +230,10 @@ def probe_output(case, dim: int, procedure: str) -> list[str]:
     return out
 
 
-def _output_options(dim: int, procedure: str) -> str:
-    """A 2D model's results on its own nodes (not the 3D expansion's); an explicit step's at the
-    case's dt grid (the time points ``GRID``), not at each of its many increments."""
-    return ("" if dim == 3 else ", OUTPUT=2D") + (", TIME POINTS=GRID" if procedure == EXPLICIT else "")
+def _output_options(dim: int, every: int) -> str:
+    """A 2D model's results on its own nodes (not the 3D expansion's), every ``every`` increments
+    (ccx takes the last ``FREQUENCY`` for all its file output, so each card gets the same)."""
+    return ("" if dim == 3 else ", OUTPUT=2D") + (f", FREQUENCY={every}" if every > 1 else "")
 
 
 def _params(case) -> str:

@@ -98,7 +98,7 @@ def read_results(case, deck: Deck, work: Path, log: str = "") -> RunResult:
     time grid (``cpu_time_s`` left 0)."""
     if not (work / "job.frd").exists():
         raise CalculixFailed(f"calculix: ccx wrote no results: {_last_error(log)}")
-    blocks = read_frd(work / "job.frd", {"DISP", "VELO", "STRESS", "PE"})
+    blocks = read_frd(work / "job.frd", set(RESULTS.values()), _reducer(case, deck))
     increments = read_sta(work / "job.sta") if (work / "job.sta").exists() else []
     # the increments every result block has (a failed run's last one may be cut short)
     n_inc = min(len(b) for b in blocks.values()) if blocks else 0
@@ -127,17 +127,53 @@ def read_results(case, deck: Deck, work: Path, log: str = "") -> RunResult:
             and not fixed_increments(case) else TIME_STEP[deck.procedure]}
     if deck.procedure == MODAL:
         info["modes"] = _modes(deck.text)
+    if deck.procedure == EXPLICIT and ccx_t.size > 1:  # how far apart its outputs fell, in dt
+        info.update(output_every=deck.every, output_spacing_dt=float(np.diff(ccx_t).max() / case.dt),
+                    predicted_increment=deck.increment)
+        selected = SELECTED_INCREMENT.search(log)
+        if selected:
+            info["ccx_increment"] = float(selected.group(1))
     if case.material.plastic:
         info["peps"] = PEEQ_NOTE
     return RunResult(t=t, history=history, n_dof=deck.nodes.size * deck.points.shape[0],
                      iterations=[int(i) for i in iterations], converged=bool(converged), message=message, info=info)
 
 
+#: ccx's explicit increment in its output
+SELECTED_INCREMENT = re.compile(r"SELECTED time increment:\s*(\S+)")
+#: the .frd's result that holds each probe field
+RESULTS = {"u": "DISP", "v": "VELO", "sigma": "STRESS", "peps": "PE"}
+
+
+def _reducer(case, deck: Deck) -> Callable:
+    """What to keep of each result block: the probes' nodes (every node where a probe takes a mean
+    over the body) and the block's largest first component (a ``'max'`` probe's)."""
+    kept = {}
+    for probe in case.probes:
+        name = RESULTS[probe.field]
+        nodes = kept.setdefault(name, set())
+        if probe.kind == "body_mean" or nodes is None:
+            kept[name] = None
+        elif probe.kind == "point":
+            nodes.add(deck.probe_nodes[probe.name])
+    kept = {name: None if nodes is None else np.array(sorted(nodes), int) for name, nodes in kept.items()}
+
+    def reduce(name: str, nodes: np.ndarray, values: np.ndarray) -> tuple:
+        peak = float(values[:, 0].max()) if values.size else 0.0
+        wanted = kept.get(name, np.zeros(0, int))
+        if wanted is not None:
+            inside = np.isin(nodes, wanted)
+            nodes, values = nodes[inside], values[inside]
+        return nodes, values, peak
+
+    return reduce
+
+
 #: ccx's eigensolver (ARPACK's d[n,s]aupd / d[n,s]eupd) did not give the modes asked for
 EIGEN_FAILED = re.compile(r"\*ERROR in d\[n,s\][ae]upd")
 #: how each procedure steps, for ``info['time_step']`` (the plastic implicit runs' own increments aside)
 TIME_STEP = {IMPLICIT: "dt", MODAL: "dt (each mode exact under piecewise-linear loads)",
-             EXPLICIT: "ccx's own (Courant), the results at the dt grid"}
+             EXPLICIT: "ccx's own (Courant), written at least four times a dt and interpolated onto the dt grid"}
 
 
 def _modes(text: str) -> int:
@@ -180,7 +216,7 @@ class _Fields:
 
     def nodal(self, name: str, k: int, width: int) -> np.ndarray:
         """Result ``name`` of increment ``k`` at every node of the reference mesh (0 where ccx has none)."""
-        nodes, values = self.blocks[name][k]
+        nodes, values, _ = self.blocks[name][k]
         out = np.zeros((self.n_nodes, width))
         inside = nodes <= self.n_nodes
         out[nodes[inside] - 1] = values[inside, :width]
@@ -196,7 +232,7 @@ class _Fields:
 
     def value(self, probe, k: int) -> float:
         if probe.kind == "max" and probe.field == "peps":
-            return float(self.nodal("PE", k, 1).max())
+            return max(self.blocks["PE"][k][2], 0.0)  # as over every node, those without PEEQ at 0
         if probe.kind == "point" and probe.field in ("u", "v"):
             return self._rotate_vector(probe, self.nodal("DISP" if probe.field == "u" else "VELO", k, 3))
         if probe.kind == "point" and probe.field == "peps":
