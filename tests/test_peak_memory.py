@@ -83,3 +83,41 @@ def test_a_peak_is_the_recorded_one_else_scaled_from_its_relatives_unknowns():
     # refine 4: 4 x the unknowns of refine 2 at its 10 kB per unknown above the process's 150 MB
     assert peaks(finer) == pytest.approx(150 * MB + 16000 * 40 * MB / 4000)
     assert peaks(Job.make("thick_cylinder", "reference-2d", {})) == 0.0  # no relative on record
+
+
+def _die_or_sleep(job: str) -> str:
+    """A worker's run: ``'bad'`` kills its own process (as the system's out-of-memory killer
+    would), the others take 0.3 s."""
+    import os
+    import signal
+
+    if job == "bad":
+        os.kill(os.getpid(), signal.SIGKILL)
+    time.sleep(0.3)
+    return "ok"
+
+
+def test_a_run_whose_worker_is_killed_is_failed_and_the_study_goes_on():
+    """A worker killed mid-run breaks the pool and every run on it (a raw BrokenProcessPool
+    before): the runs go again, each alone, on a new pool; the one that dies again alone is
+    failed with one line, the others come back as they are, and the queue goes on."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    from smfem.studies.executors import KILLED
+    from smfem.studies.jobs import FAILED, Outcome
+
+    pools = []
+
+    def start(job):
+        if not pools or pools[-1]._broken:
+            pools.append(ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("fork")))
+        return pools[-1].submit(_die_or_sleep, job)
+
+    try:
+        outcomes = dict(local(["good", "bad", "after", "last"], 2, start=start))
+    finally:
+        for pool in pools:
+            pool.shutdown(wait=True)
+    assert outcomes == {"good": "ok", "bad": Outcome(FAILED, KILLED), "after": "ok", "last": "ok"}
+    assert len(pools) >= 3  # the first broke, and so did the one where "bad" ran again alone

@@ -101,8 +101,8 @@ def test_a_stopped_pass_resumes_from_its_log_and_a_log_of_another_boot_or_source
 
     from reports import timing
 
-    monkeypatch.setattr(timing.provenance, "commit", lambda: "abc")
-    monkeypatch.setattr(timing.provenance, "same_sources", lambda made_by: made_by == timing.provenance.commit())
+    monkeypatch.setattr(timing.provenance, "commit", lambda *paths: "abc")
+    monkeypatch.setattr(timing.provenance, "same_sources", lambda made_by, *paths: made_by == timing.provenance.commit())
     monkeypatch.setattr(timing, "boot", lambda: "boot-1")
     jobs = [Job.make("dome", "smfem", {}), Job.make("dome", "reference-2d", {}), Job.make("rod_impact", "smfem", {})]
     cost = dict(zip(jobs, (0.5, 1.5, 0.2)))
@@ -141,10 +141,10 @@ def test_a_stopped_pass_resumes_from_its_log_and_a_log_of_another_boot_or_source
         with pytest.raises(Stopped):
             retime([jobs[:2], jobs[2:]], rule, run=timing.PassLog(path, rule, stops_after_four), progress=False)
         monkeypatch.setattr(timing, "boot", lambda boot=boot: boot)
-        monkeypatch.setattr(timing.provenance, "commit", lambda commit=commit: commit)
+        monkeypatch.setattr(timing.provenance, "commit", lambda *paths, commit=commit: commit)
         assert timing.PassLog(path, other_rule, run).resumed == 0
         monkeypatch.setattr(timing, "boot", lambda: "boot-1")
-        monkeypatch.setattr(timing.provenance, "commit", lambda: "abc")
+        monkeypatch.setattr(timing.provenance, "commit", lambda *paths: "abc")
 
 
 def test_a_batch_waits_for_the_hosts_memory_speed_to_come_back_within_the_slack():

@@ -15,7 +15,7 @@ from concurrent.futures.process import BrokenProcessPool
 
 from smfem.runs.registry import lookup
 
-from .jobs import Job, execute
+from .jobs import FAILED, Job, Outcome, execute
 from .peak_memory import MemoryLimit
 
 
@@ -80,13 +80,27 @@ def local(queue: list[Job], workers: int, limit: MemoryLimit | None = None, star
     and the running jobs' stay within it, a later one that fits taking its turn meanwhile.
     ``start(job) -> Future``: how a job starts (default: on the session's pool). Left early
     (the caller stops iterating, or an error), the jobs not started are dropped and the
-    running ones finish before it returns, as they did when each study had its own pool."""
+    running ones finish before it returns, as they did when each study had its own pool.
+
+    A worker that dies mid-run (killed by the system's out-of-memory killer, say) breaks the
+    pool and every run on it: those runs go again, each alone, on a new pool, and one that dies
+    alone is recorded :data:`KILLED` (``failed``); the study goes on.
+    """
     start = start or (lambda job: _submit(workers, execute, job, lookup(job.solver)))
     feed, waiting, pending = _Feed(queue), [], {}
+    suspects, alone = [], []  # runs on a pool that broke; those running alone after it
 
     def submit():
         waiting.extend(feed.new())
-        while len(pending) < workers and waiting:
+        while len(pending) < workers and (waiting or suspects):
+            if any(job in alone for job in pending.values()):
+                return
+            if suspects:  # after the runs still going, alone, so that a second death names its run
+                if not pending:
+                    job = suspects.pop(0)
+                    alone.append(job)
+                    pending[start(job)] = job
+                return
             job = limit.pick(waiting, list(pending.values())) if limit else waiting[0]
             if job is None:
                 return
@@ -98,12 +112,27 @@ def local(queue: list[Job], workers: int, limit: MemoryLimit | None = None, star
         while pending:
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in done:
-                yield pending.pop(future), future.result()
-                submit()
+                job = pending.pop(future)
+                try:
+                    outcome = future.result()
+                except BrokenProcessPool:
+                    if job not in alone:
+                        suspects.append(job)
+                        continue
+                    outcome = Outcome(FAILED, KILLED)
+                if job in alone:
+                    alone.remove(job)
+                yield job, outcome
+            submit()
     finally:
         for future in pending:
             future.cancel()
         wait(pending)
+
+
+#: a run whose worker died under it twice, the second time alone
+KILLED = ("its worker process died under it, also when run alone: killed by the system, most likely for "
+          "memory (see dmesg)")
 
 
 class SchedulerUnreachable(OSError):
