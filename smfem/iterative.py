@@ -6,8 +6,11 @@ iteration solves the elastic system with the residual of the current iterate,
 ``u <- u + A^-1 (Q + F_p - K u - a0 M (u - u_pred))``. ``K`` and ``M`` are applied exactly,
 the harmonic coupling of the cut-outs included (:class:`smfem.coupling.StackedOperator`);
 the plastic strains live at the sample points (:mod:`smfem.sampling`), where the trial
-stresses of the step's displacement increment go through the material's law (:mod:`smfem.laws`;
-von Mises: returned to the yield surface by Wilkins' correction (16)). ``A``, the iteration
+stresses, the elastic stress of the iterate less the committed relaxed stress (the stress of
+the step's displacement increment from the committed state), go through the material's law
+(:mod:`smfem.laws`; von Mises: returned to the yield surface by Wilkins' correction (16)). After
+a step's first iteration only the points that the change since its first iterate may carry past
+the yield surface are visited (:mod:`smfem.screening`). ``A``, the iteration
 matrix, is one of three: the whole coupled ``K + a0 M`` solved directly (:class:`Factorized`, a
 form of :mod:`smfem.coupled_solve`; exact for an elastic step: one iteration and a check), the
 same system by conjugate gradients with the diagonal blocks as preconditioner
@@ -37,7 +40,13 @@ from .linalg import BlockFactors, block_diagonal, step_blocks
 from .newmark import Constants, Load, StepFailed, acceleration_at_rest
 from .options import SolverOptions
 from .sampling import SamplePoints
+from .screening import Screen
 
+
+#: the share of the points above which the iterations after a step's first visit every point,
+#: not those the screen leaves (:mod:`smfem.screening`), for the rest of the step: the notched
+#: strip's hinge, whose bound leaves 70 % of the points, is cheaper whole
+SCREEN_SHARE = 0.3
 
 #: relative residual to which conjugate gradients solve a correction ('matrix-free'), and their
 #: iteration limit: the outer iterations converge by this factor each, so it need not be tight
@@ -170,9 +179,10 @@ class Anderson:
 
 @dataclass
 class PointState:
-    """Committed state at the sample points: the law's (stresses rows first ``(6, n_points)``,
-    and whatever else the law keeps) and ``relaxed = f D eps_p`` (6, n_points), the stress the
-    inelastic strains took off, whose forces are the additional loads."""
+    """Committed state at the sample points: the law's (its plastic strains and whatever else
+    it keeps; not its stresses, which the iterations make from the amplitudes) and ``relaxed =
+    f D eps_p`` (6, n_points), the stress the inelastic strains took off, whose forces are the
+    additional loads: the stress at the points is ``stress(u) - relaxed``."""
 
     law: object
     relaxed: np.ndarray
@@ -211,10 +221,14 @@ class BlockIterative:
         index = np.broadcast_to(model.material_index[:, None, None], self.points.point_shape[1:]).ravel()
         self.law = laws.for_points(model.case.materials, index, factor)
         self.state = PointState(self.law.initial_state(n_points), np.zeros((6, n_points)))
+        #: which points the iterations after a step's first visit, where the law can tell how far
+        #: a trial is from leaving its elastic range (:mod:`smfem.screening`); else every point
+        self.screen = Screen(self.points) if hasattr(self.law, "stress_at") else None
         self.loads = np.zeros_like(self.Q)  # the committed additional loads F_p
         self.loads_before = self.loads
         #: the converged step's point state and loads, which :meth:`commit` makes the state
         self.pending: tuple[PointState, np.ndarray] | None = None
+        self._peps = None  # :attr:`peps_sampled` of the committed state, once asked
         self.timings = {"synthesis": 0.0, "stress": 0.0, "projection": 0.0, "solves": 0.0}
 
     @property
@@ -222,7 +236,9 @@ class BlockIterative:
         """Plastic strain intensity sqrt(2/3 eps_p : eps_p) at the sample points only (the
         fundamental domain along x3), (ne, section points, n_x3); :attr:`peps_images` maps
         :attr:`peps_x3` onto them."""
-        return self.law.equivalent_plastic_strain(self.state.law).reshape(self.points.point_shape[1:])
+        if self._peps is None:
+            self._peps = self.law.equivalent_plastic_strain(self.state.law)
+        return self._peps.reshape(self.points.point_shape[1:])
 
     @property
     def peps_images(self) -> np.ndarray:
@@ -247,8 +263,6 @@ class BlockIterative:
 
     def initial_acceleration(self, u0: np.ndarray) -> np.ndarray:
         """``M a = Q - K u0`` (no plastic strain at t = 0; ``u0`` is elastic)."""
-        if u0.any():
-            self.state.law.sigma = self.points.stress(u0).reshape(6, -1)
         force = self.load(0.0) - self.op.K(u0)
         mass = self.model.mass_matrix if self.model.coupling else lambda: self.op.M_h
         return acceleration_at_rest(mass, force)
@@ -257,6 +271,14 @@ class BlockIterative:
         self.loads_before = self.loads
         self.state, self.loads = self.pending
         self.pending = None
+        # a step changes the plastic strain at its yielding points only: the probes ask every step
+        at = self.state.law.yielding
+        if self._peps is not None and len(at):
+            if hasattr(self.law, "equivalent_plastic_strain_at"):
+                self._peps = self._peps.copy()
+                self._peps[at] = self.law.equivalent_plastic_strain_at(self.state.law, at)
+            else:
+                self._peps = None
 
     def observe(self, state) -> None:
         """Nothing to watch between steps."""
@@ -278,18 +300,39 @@ class BlockIterative:
         # iterations per step); the iterations recompute them from the state, so only the start moves
         x = u
         loads = start = 2 * self.loads - self.loads_before
+        first = None  # the step's first iterate, its trial stresses and their headroom, once made
         for iteration in range(1, self.max_iter + 1):
             t0 = tick()
             dx = self.iteration.correction(x, step, loads)
             x = x + dx if anderson is None else anderson.next(x, dx)
             t1 = tick()
-            trial = state.law.sigma + pts.stress(x - u).reshape(6, -1)
-            t2 = tick()
-            sigma, law_state = self.law.stress(trial, state.law)
+            visited = None
+            if first is not None:  # only where the change since the first iterate may reach the yield surface
+                if first[2] is None:
+                    first[2] = self.screen.room(self.law.headroom(first[1], state.law))
+                moved = x - first[0]
+                coefficients = pts.series.coefficients(moved)
+                visited = self.screen.at_risk(coefficients, first[2])
+                if len(visited) > SCREEN_SHARE * first[1].shape[1]:
+                    visited = first = None  # most of the body: every point, for the rest of the step
+            if visited is None:
+                # the stress of the amplitudes less what the plastic strains took off: the trial
+                # of a step from the committed state, made from the amplitudes alone
+                trial = pts.stress(x).reshape(6, -1) - state.relaxed
+                t2 = tick()
+                sigma, law_state = self.law.stress(trial, state.law)
+                if iteration == 1 and self.screen is not None:
+                    first = [x, trial, None]  # its headroom once a second iteration asks
+            else:
+                trial = np.take(first[1], visited, axis=1) + pts.stress_at(moved, visited, coefficients)
+                t2 = tick()
+                sigma, law_state = self.law.stress_at(trial, state.law, visited)
             t3 = tick()
             loads, at = self.loads, law_state.yielding
             if len(at):
-                change = np.take(trial, at, axis=1) - np.take(sigma, at, axis=1)  # = f D d_eps_p
+                # the yielding points' rows of trial and sigma (those of ``visited`` where it is set)
+                local = at if visited is None else np.searchsorted(visited, at)
+                change = np.take(trial, local, axis=1) - np.take(sigma, local, axis=1)  # = f D d_eps_p
                 # the forces are linear in the relaxed stress: the committed ones plus those of
                 # the step's change, which is at the yielding points only
                 loads = self.loads + pts.forces_at(change, at)

@@ -6,6 +6,11 @@ shears, rows first ``(6, n)``); its input to :meth:`stress` is the trial stress
 ``LAWS[material.law](material, factor)``, ``factor`` the stiffness factor per point (the cut-outs'
 contrast material: 1 elsewhere). An unknown law is refused when the model is built
 (:func:`get`). Add one with :func:`register`.
+
+A law may also say how far each trial stress is from leaving its elastic range (``headroom``)
+and take its stress at some points only (``stress_at``, ``equivalent_plastic_strain_at``): the
+iterations then visit only the points a change may carry past it (:mod:`smfem.screening`); a
+law without them is visited at every point.
 """
 
 from __future__ import annotations
@@ -20,7 +25,7 @@ from cases.material import ELASTIC, VON_MISES, lame, sigma_y_from_tau_s
 from cases.params import UnsupportedCase
 
 from .constitutive import isotropic_D
-from .plasticity import intensity, return_map_rows
+from .plasticity import intensity, return_map_rows, von_mises
 
 
 
@@ -97,6 +102,33 @@ class VonMises(Elastic):
 
     def equivalent_plastic_strain(self, state) -> np.ndarray:
         return intensity(state.eps_p.T)
+
+    def equivalent_plastic_strain_at(self, state, points: np.ndarray) -> np.ndarray:
+        """:meth:`equivalent_plastic_strain` at ``points`` only."""
+        return intensity(np.take(state.eps_p, points, axis=1).T)
+
+    def headroom(self, trial: np.ndarray, state) -> np.ndarray:
+        """(n,) how far each trial stress is inside the yield surface of the committed
+        ``state``, in the von Mises stress (negative where it yields): a trial that moves by
+        less stays elastic (:mod:`smfem.screening`)."""
+        return self._limit(state.alpha) - von_mises(trial)
+
+    def stress_at(self, trial: np.ndarray, state, points: np.ndarray) -> tuple[np.ndarray, PlasticState]:
+        """:meth:`stress` at ``points`` (k,) only, ``trial`` (6, k) theirs: every other point
+        is known to stay elastic. The state left holds no stresses (``sigma`` None: the
+        iterations make each trial from the amplitudes) and its ``yielding`` among all points."""
+        mu = self.mu[points] if np.ndim(self.mu) else self.mu
+        sigma_y0, H = (v if np.ndim(v) == 0 else v[points] for v in (self.sigma_y0, self.H))
+        sigma, alpha, at, deps_p = return_map_rows(trial, state.alpha[points], np.broadcast_to(mu, len(points)),
+                                                   sigma_y0, H)
+        alpha_all = state.alpha
+        if len(at):
+            alpha_all = alpha_all.copy()
+            alpha_all[points[at]] = alpha[at]
+        return sigma, PlasticState(None, alpha_all, state.eps_p, points[at], deps_p)
+
+    def _limit(self, alpha: np.ndarray) -> np.ndarray:
+        return self.sigma_y0 + self.H * alpha if np.any(self.H) else np.broadcast_to(self.sigma_y0, alpha.shape)
 
 
 #: law name -> ``(material, factor) -> law``

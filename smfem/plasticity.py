@@ -28,6 +28,11 @@ def shear_intensity(sigma: np.ndarray) -> np.ndarray:
     return np.sqrt(_shear_squared(np.moveaxis(sigma, -1, 0)))
 
 
+def von_mises(rows: np.ndarray) -> np.ndarray:
+    """``sqrt(3) T`` of stresses stored rows first, (6, ...)."""
+    return SQRT3 * np.sqrt(_shear_squared(rows))
+
+
 def _shear_squared(rows: np.ndarray) -> np.ndarray:
     """``T^2`` of stresses stored rows first, (6, ...)."""
     mean = (rows[0] + rows[1] + rows[2]) / 3.0

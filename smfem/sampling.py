@@ -104,6 +104,7 @@ class DofSeries:
         if combine is not None:
             psi = psi @ combine
         self.psi = psi.transpose(1, 0, 2).copy()  # (2, modes, nq): synthesis per basis type
+        self.psi_max = np.abs(self.psi).max(axis=2)  # (2, modes): each basis function's largest magnitude
         self.psi_w = (psi * weights).transpose(1, 2, 0).copy()  # (2, nq, modes): weighted projection
         self.E = block_diagonal(rows_of(model, dofs))  # stacked -> (modes, dofs)
         self.Et = self.E.T.tocsr()
@@ -113,12 +114,24 @@ class DofSeries:
         N = (self.E @ u).reshape(self.n_modes, self.n_dof)
         return np.concatenate([N, N * self.k[:, None]], axis=1)[:, self.source]
 
-    def values(self, u: np.ndarray) -> np.ndarray:
-        """The series of stacked amplitudes ``u`` at the points: (2 n, nq), sorted rows."""
-        coefficients = self.coefficients(u)
-        out = np.empty((2 * self.n_dof, self.psi.shape[2]))
+    def values(self, u: np.ndarray, points: np.ndarray | None = None, coefficients: np.ndarray | None = None) -> np.ndarray:
+        """The series of stacked amplitudes ``u`` at the points (``points``: at these of them
+        only): (2 n, nq), sorted rows; ``coefficients``: ``u``'s (:meth:`coefficients`), made already."""
+        coefficients = self.coefficients(u) if coefficients is None else coefficients
+        psi = self.psi if points is None else self.psi[:, :, points]
+        out = np.empty((2 * self.n_dof, psi.shape[2]))
         for t, rows in enumerate(self.types):
-            out[rows] = coefficients[:, rows].T @ self.psi[t]
+            out[rows] = coefficients[:, rows].T @ psi[t]
+        return out
+
+    def bound(self, coefficients: np.ndarray) -> np.ndarray:
+        """(2 n,) on the sorted rows: no series of the amplitudes whose :meth:`coefficients` these
+        are exceeds this in magnitude at any of the points (the sum over the modes of each
+        coefficient times its basis function's largest magnitude there)."""
+        coefficients = np.abs(coefficients)
+        out = np.empty(2 * self.n_dof)
+        for t, rows in enumerate(self.types):
+            out[rows] = self.psi_max[t] @ coefficients[:, rows]
         return out
 
     def amplitudes(self, projected: np.ndarray) -> np.ndarray:
@@ -287,6 +300,21 @@ class SamplePoints:
         out = (self.to_stress @ self.series.values(u)).reshape(self.point_shape)
         if len(self.scaled):
             out[:, self.scaled] *= self.scale
+        return out
+
+    def stress_at(self, u: np.ndarray, points: np.ndarray, coefficients: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`stress` of ``u`` at the flat ``points`` (k,) of the point arrays only, (6, k):
+        the series at the x3 points among them only (the section's sparse rows all: slicing
+        them costs more than the product); ``coefficients``: ``u``'s series', made already."""
+        nq = self.point_shape[3]
+        if not len(points):
+            return np.zeros((6, 0))
+        section, x3 = np.divmod(points, nq)
+        live_x3, at_x3 = np.unique(x3, return_inverse=True)
+        block = (self.to_stress @ self.series.values(u, live_x3, coefficients)).reshape(6, -1, len(live_x3))
+        out = block[:, section, at_x3]
+        if len(self.scaled):
+            out *= self.factor[section // self.point_shape[2], x3]
         return out
 
     def forces(self, sigma: np.ndarray) -> np.ndarray:

@@ -95,6 +95,9 @@ class DensePoints(SamplePoints):
     def stress(self, u):
         return dense_stress(self.model, self, u)
 
+    def stress_at(self, u, points, coefficients=None):
+        return dense_stress(self.model, self, u).reshape(6, -1)[:, points]
+
     def forces(self, sigma):
         return dense_forces(self.model, self, sigma)
 
