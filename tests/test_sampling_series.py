@@ -82,6 +82,27 @@ def test_series_stresses_and_forces_are_the_products_mode_by_mode(case, families
         assert np.abs(points.forces_at(values, at) - f).max() <= 1e-12 * np.abs(f).max()
 
 
+@pytest.mark.parametrize("name, params, mirrored", [
+    ("moving_load_notched", {"harmonics": 60}, True),  # the notch centred: points about mid-span
+    ("notched_cylinder", {"harmonics": 12}, True),  # about the middle of the quarter
+    ("notched_strip", {"harmonics": 30}, False)])  # the notch at one end of the half span
+def test_the_series_by_parity_about_the_middle_are_the_whole_products(name, params, mirrored):
+    """Where the points along x3 and their weights are symmetric about their middle and every
+    mode even or odd there, the series made at half the points by parity equal the whole
+    product to round-off; elsewhere there is no parity to take."""
+    from smfem.sampling import MirrorParity
+
+    model = Model(get_case(name, params), nonlinear=True)
+    points = SamplePoints(model, oversampling=1.0)
+    series = points.series
+    parity = MirrorParity.of(series.psi, points.x3, points.w)
+    assert (parity is not None) == mirrored
+    if mirrored:
+        c = series.coefficients(np.random.default_rng(2).normal(size=model.n_dof))
+        whole = np.concatenate([c[:, rows].T @ series.psi[t] for t, rows in enumerate(series.types)])
+        assert np.abs(parity.values(c, series.types, len(whole)) - whole).max() <= 1e-13 * np.abs(whole).max()
+
+
 def scattered(points: SamplePoints, values: np.ndarray, at: np.ndarray) -> np.ndarray:
     """Stresses ``values`` (6, k) at the flat points ``at``, zero elsewhere: (6, ne, ng, nq)."""
     full = np.zeros((6, int(np.prod(points.point_shape[1:]))))
