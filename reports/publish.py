@@ -29,6 +29,10 @@ from .verdict import names_an_engine, summary_table, verdict
 PUBLISHED = ("headline", "fronts", "carried", "timing", "timing_repeats")
 
 
+#: what makes a published report: its runs' sources and the pages' writer (not the files it
+#: publishes, which it has changed by the time it names its commit)
+REPORT_SOURCES = (*provenance.SOURCES, "reports")
+
 def _cpu_model() -> str:
     try:
         line = next(x for x in Path("/proc/cpuinfo").read_text().splitlines() if x.startswith("model name"))
@@ -80,7 +84,7 @@ def publish(report, directory: Path, settings: str, workers: int, scheduler: str
         "runs_cached": report.study.cached,
         # a report made from nothing at a commit has every run made from its sources, by this pass
         # or by an earlier one into the same new cache (smfem.studies.provenance)
-        "commit": provenance.commit(),
+        "commit": provenance.commit(REPORT_SOURCES),
         **made_here(report.study),
         "cpu_time_s_of_runs": round(float(pd.to_numeric(runs.cpu_time_s, errors="coerce").sum()), 1),
         "peak_memory_mb": None if largest is None else round(float(largest.peak_memory_mb), 1),

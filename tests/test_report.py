@@ -479,7 +479,7 @@ def test_published_findings_are_the_reports_tables_with_its_time_machine_and_pea
     carried tables as written, and run.json; every run states its peak memory."""
     import json
 
-    from reports.publish import PUBLISHED, publish
+    from reports.publish import PUBLISHED, REPORT_SOURCES, publish
     from smfem.studies.cache import made_of
     from smfem.studies import provenance
 
@@ -494,7 +494,8 @@ def test_published_findings_are_the_reports_tables_with_its_time_machine_and_pea
     assert made["runs_executed"] == len(tiny.study.executed) and made["wall_time_s"] > 0
     # which sources made the runs: each run of the tiny report, counted once, recorded as made by
     # this checkout's commit (from these sources unless they have uncommitted changes)
-    assert made["commit"] == provenance.commit()
+    # the commit of what made it, not "+changes" for the files it has just published
+    assert made["commit"] == provenance.commit(REPORT_SOURCES)
     runs = {run.path for case in tiny.study.cases for run in case.all_runs() if run.path is not None}
     if made["commit"] is not None:
         assert re.fullmatch(r"[0-9a-f]{40}(\+changes)?", made["commit"])
