@@ -155,26 +155,37 @@ def _speedup_cell(speedup, which: str = "") -> str:
     return f"{bound + ' ' if bound else ''}{_times(x)}" + (f" ({', '.join(said)})" if said else "")
 
 
-def summary_table(head: pd.DataFrame, vs=(("reference-2d", "2D FEM"), ("reference-3d", "3D FEM"),
-                                          ("calculix", "CalculiX"))) -> list[str]:
-    """The verdict as a Markdown table, one row per scene: the smallest target SMFEM reaches
-    (1 % before 5 %), its CPU time with the cheaper element, and its speed-up there over each
-    of ``vs`` (a bound where that solver's series ends above the target; over the 3D reference
-    the cheaper of its two engines there, over CalculiX the cheapest of its procedures, named
-    in the cell)."""
-    lines = ["| scene | SMFEM reaches | CPU s | " + " | ".join(f"times faster than {n}" for _, n in vs) + " |",
-             "|---|---|---|" + "---|" * len(vs)]
+#: the solvers of the verdict table's columns, as README and the published page name them
+VERSUS = (("reference-2d", "2D FEM"), ("reference-3d", "3D FEM"), ("calculix", "CalculiX"))
+
+
+def scene_rows(head: pd.DataFrame, vs=VERSUS) -> list[tuple[str, float | None, str, list[str]]]:
+    """Per scene of the headline table: the smallest target SMFEM reaches (1 % before 5 %; None:
+    neither), its CPU time there with the cheaper element (its best error where it reaches
+    none) and its speed-up cell over each of ``vs`` (:func:`_speedup_cell`; a bound where that
+    solver's series ends above the target; over the 3D reference the cheaper of its two engines
+    there, over CalculiX the cheapest of its procedures, named in the cell)."""
+    out = []
     for case, rows in head.groupby("case", sort=False):
         rows = rows.set_index("solver")
         mine, others = split_smfem(rows)
         reached = next(((t, c) for t in TARGETS if (c := cheapest(mine, f"cpu_s_to_{_pct(t)}")[1])), None)
         if reached is None:
-            best = _best(mine)
-            lines.append(f"| {case} | no target (best {_pct_text(best)}) | - | " + " | ".join("-" for _ in vs) + " |")
+            out.append((case, None, _pct_text(_best(mine)), ["-" for _ in vs]))
             continue
         target, cost = reached
         cells = [_speedup_cell(others.at[s, f"smfem_speedup_{_pct(target)}"],
                                engine(s, others.at[s, f"cpu_s_to_{_pct(target)}"])) if s in others.index else "-"
                  for s, _ in vs]
-        lines.append(f"| {case} | {100 * target:g} % | {cost.group(1)} | " + " | ".join(cells) + " |")
+        out.append((case, target, cost.group(1), cells))
+    return out
+
+
+def summary_table(head: pd.DataFrame, vs=VERSUS) -> list[str]:
+    """The verdict as a Markdown table, one row per scene (:func:`scene_rows`)."""
+    lines = ["| scene | SMFEM reaches | CPU s | " + " | ".join(f"times faster than {n}" for _, n in vs) + " |",
+             "|---|---|---|" + "---|" * len(vs)]
+    for case, target, cost, cells in scene_rows(head, vs):
+        reached = f"{100 * target:g} %" if target is not None else f"no target (best {cost})"
+        lines.append(f"| {case} | {reached} | {cost if target is not None else '-'} | " + " | ".join(cells) + " |")
     return lines

@@ -1,0 +1,56 @@
+"""README's findings as ``python -m reports.readme`` writes them from a published report: every
+number in bold is a cell of the verdict table, every scene where SMFEM is slower or misses 1 %
+is named, and the blocks between the markers are all it rewrites."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from reports.readme import MARKERS, findings, published, written
+from reports.verdict import scene_rows, summary_table
+
+QUICK = Path(__file__).resolve().parents[1] / "docs" / "quick-report"
+
+
+def _leading_numbers(table: list[str]) -> set[str]:
+    cells = {c.strip() for line in table[2:] for c in line.split("|")}
+    return {m.group(1) for c in cells if (m := re.match(r"^(?:[<>] )?([0-9.]+)", c))}
+
+
+def _slower_head(head: pd.DataFrame) -> pd.DataFrame:
+    """The published table with one scene's 2D speed-up at 1 % made a loss."""
+    head = head.copy()
+    at = head.index[(head.solver == "reference-2d") & head.smfem_speedup_1pct.astype(str).str.match(r"^[0-9.]+x$")][0]
+    head.loc[at, "smfem_speedup_1pct"] = "0.5x"
+    return head
+
+
+def test_the_findings_bold_only_the_tables_cells_and_name_every_loss_and_miss():
+    head, made = published(QUICK)
+    head = _slower_head(head)
+    text = findings(head, made)
+    assert text.startswith("**What it found**")
+    bold = re.findall(r"\*\*([0-9.]+)\*\*", text)
+    assert bold and set(bold) <= _leading_numbers(summary_table(head))
+    rows = scene_rows(head)
+    slower = [case for case, target, _, cells in rows if target == 0.01 and "slower" in cells[0]]
+    assert slower and all(f"{case.replace('_', ' ')} (**0.5**)" in text for case in slower)
+    for case, target, _, _ in rows:
+        if target != 0.01:
+            assert case.replace("_", " ") in text  # at 5 % only, or neither target
+
+
+def test_written_replaces_the_marked_blocks_only_and_refuses_a_readme_without_them():
+    head, made = published(QUICK)
+    (f0, f1), (v0, v1) = MARKERS["findings"], MARKERS["verdict"]
+    readme = f"# smfem\n\nIntro.\n\n{f0}\nold words\n{f1}\n\nBetween.\n\n{v0}\n| old | table |\n{v1}\n\nEnd.\n"
+    new = written(readme, head, made)
+    assert new.startswith("# smfem\n\nIntro.\n\n") and "\n\nBetween.\n\n" in new and new.endswith("\n\nEnd.\n")
+    assert findings(head, made) in new and "\n".join(summary_table(head)) in new and "old" not in new
+    assert written(new, head, made) == new
+    with pytest.raises(ValueError, match="no block"):
+        written("# smfem\n", head, made)
