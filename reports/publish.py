@@ -33,6 +33,7 @@ PUBLISHED = ("headline", "fronts", "carried", "timing", "timing_repeats")
 #: publishes, which it has changed by the time it names its commit)
 REPORT_SOURCES = (*provenance.SOURCES, "reports")
 
+
 def _cpu_model() -> str:
     try:
         line = next(x for x in Path("/proc/cpuinfo").read_text().splitlines() if x.startswith("model name"))

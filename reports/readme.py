@@ -1,7 +1,8 @@
 """README's findings, written from the published full report: the opening paragraph's numbers and
 the verdict table, between markers, by ``python -m reports.readme`` from
-``docs/full-report/tables/headline.csv`` and ``run.json`` (never typed by hand: the test in
-``tests/test_examples.py`` holds README to what this writes).
+``docs/full-report/tables/headline.csv`` and ``run.json``, never typed by hand
+(``tests/test_readme.py``: every number in bold is a table cell, every loss and miss named, only
+the marked blocks rewritten).
 """
 
 from __future__ import annotations
