@@ -31,8 +31,14 @@ def _cell(text: str) -> tuple[str, str, list[str]] | None:
     return (m.group(1) or "", m.group(2), m.group(3).split(", ") if m.group(3) else []) if m else None
 
 
-def _scene(case: str) -> str:
-    return "the " + case.replace("_", " ")
+#: scenes whose names do not read as prose with underscores made spaces
+SCENE_PROSE = {"moving_load_notched": "the notched moving load", "layered_cylinder_pulse": "the layered cylinder's pulse",
+               "ring_in_ring": "the rings in contact", "rod_collision": "the colliding rods"}
+
+
+def scene_prose(case: str) -> str:
+    """A scene as a sentence names it: 'the thick cylinder', 'the notched moving load'."""
+    return SCENE_PROSE.get(case, "the " + case.replace("_", " "))
 
 
 def _prose(name: str) -> str:
@@ -55,7 +61,7 @@ def _measured(rows, column: int, target: float) -> list[tuple[str, str, str]]:
         if cell and not cell[0]:
             x = float(cell[1])
             said = "slower" if "slower" in cell[2] else "faster" if x >= 1 else "even"
-            out.append((x, said, cell[1], _scene(case) + _engine(cell[2])))
+            out.append((x, said, cell[1], scene_prose(case) + _engine(cell[2])))
     return [m[1:] for m in sorted(out, reverse=True)]
 
 
@@ -82,8 +88,8 @@ def findings(head: pd.DataFrame, made: dict) -> str:
             parts.append(f"slower{'' if parts else f' than {name}'} on {_join(slower)}")
         if parts:
             text.append(("at 1 % total error SMFEM is " if len(text) == 1 else "It is ") + "; ".join(parts) + ".")
-    five = [f"{_scene(case)} ({cost} CPU s{_speedups(cells)})" for case, reached, cost, cells in rows if reached == 0.05]
-    none = [f"{_scene(case)} (best {cost})" for case, reached, cost, _ in rows if reached is None]
+    five = [f"{scene_prose(case)} ({cost} CPU s{_speedups(cells)})" for case, reached, cost, cells in rows if reached == 0.05]
+    none = [f"{scene_prose(case)} (best {cost})" for case, reached, cost, _ in rows if reached is None]
     if five:
         text.append(f"It reaches 5 % but not 1 % on {_join(five)}.")
     if none:

@@ -10,7 +10,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from reports.readme import MARKERS, findings, published, written
+from reports.readme import MARKERS, findings, published, scene_prose, written
 from reports.verdict import scene_rows, summary_table
 
 QUICK = Path(__file__).resolve().parents[1] / "docs" / "quick-report"
@@ -38,10 +38,10 @@ def test_the_findings_bold_only_the_tables_cells_and_name_every_loss_and_miss():
     assert bold and set(bold) <= _leading_numbers(summary_table(head))
     rows = scene_rows(head)
     slower = [case for case, target, _, cells in rows if target == 0.01 and "slower" in cells[0]]
-    assert slower and all(f"{case.replace('_', ' ')} (**0.5**)" in text for case in slower)
+    assert slower and all(f"{scene_prose(case)} (**0.5**)" in text for case in slower)
     for case, target, _, _ in rows:
         if target != 0.01:
-            assert case.replace("_", " ") in text  # at 5 % only, or neither target
+            assert scene_prose(case) in text  # at 5 % only, or neither target
 
 
 def test_written_replaces_the_marked_blocks_only_and_refuses_a_readme_without_them():
