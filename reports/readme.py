@@ -51,17 +51,29 @@ def _engine(notes: list[str]) -> str:
     return f" ({named[0]})" if named else ""
 
 
-def _measured(rows, column: int, target: float) -> list[tuple[str, str, str]]:
-    """``(verdict, number as the table shows it, scene and engine)`` of every measured (not bound)
+def spread(head: pd.DataFrame, case: str, solver: str, target: float) -> tuple[float, float] | None:
+    """The least and largest speed-up over ``solver`` at ``target`` that the timing pass's repeats
+    allow (``smfem_speedup_*_range``: its least CPU over SMFEM's largest, and the other way round)."""
+    rows = head[(head["case"] == case) & (head["solver"] == solver)]
+    text = rows[f"smfem_speedup_{round(100 * target)}pct_range"].iloc[0] if len(rows) else None
+    low_high = str(text).split("-") if isinstance(text, str) else []
+    return (float(low_high[0]), float(low_high[1])) if len(low_high) == 2 else None
+
+
+def _measured(rows, column: int, target: float, head: pd.DataFrame) -> list[tuple[str, str, str, str]]:
+    """``(verdict, number as the table shows it, scene and engine, note on its spread)`` of every measured (not bound)
     speed-up over the solver of ``column`` at ``target``, largest first; the verdict is
-    ``faster``, ``even`` (within half a per cent: the table says nothing) or ``slower``."""
+    ``faster``, ``slower``, or ``even`` where the repeats' spread (:func:`spread`) reaches either
+    side of one: the host's noise, not the method, decides such a ratio."""
     out = []
     for case, reached, _, cells in rows:
         cell = _cell(cells[column]) if reached == target else None
         if cell and not cell[0]:
             x = float(cell[1])
-            said = "slower" if "slower" in cell[2] else "faster" if x >= 1 else "even"
-            out.append((x, said, cell[1], scene_prose(case) + _engine(cell[2])))
+            low, high = spread(head, case, VERSUS[column][0], target) or (x, x)
+            said = "even" if low < 1 < high or x == 1 else "slower" if "slower" in cell[2] or x < 1 else "faster"
+            note = f", its repeats' ratios {low:g}-{high:g}" if said == "even" and low != high else ""
+            out.append((x, said, cell[1], scene_prose(case) + _engine(cell[2]), note))
     return [m[1:] for m in sorted(out, reverse=True)]
 
 
@@ -74,11 +86,11 @@ def findings(head: pd.DataFrame, made: dict) -> str:
     text = [f"**What it found** (the full report, {runs} runs on two cores: `docs/full-report/`):"]
     for column, (_, name) in enumerate(VERSUS):
         name = _prose(name)
-        measured = _measured(rows, column, 0.01)
+        measured = _measured(rows, column, 0.01, head)
         faster = [f"**{shown}**{' times' if not i else ''} on {scene}"
-                  for i, (said, shown, scene) in enumerate(m for m in measured if m[0] == "faster")]
-        even = [f"{scene} (**{shown}**)" for said, shown, scene in measured if said == "even"]
-        slower = [f"{scene} (**{shown}**)" for said, shown, scene in measured if said == "slower"]
+                  for i, (said, shown, scene, _) in enumerate(m for m in measured if m[0] == "faster")]
+        even = [f"{scene} (**{shown}**{note})" for said, shown, scene, note in measured if said == "even"]
+        slower = [f"{scene} (**{shown}**)" for said, shown, scene, _ in measured if said == "slower"]
         parts = []
         if faster:
             parts.append(f"faster than {name}: {_join(faster)}")
