@@ -29,7 +29,8 @@ def test_a_run_of_no_commit_or_of_uncommitted_changes_is_never_from_these_source
 def test_head_made_these_sources_unless_they_changed_and_the_first_commit_did_not():
     head = git("rev-parse", "HEAD")
     assert provenance.commit().startswith(head)
-    changed = git("status", "--porcelain", "--untracked-files=no", "--", *provenance.SOURCES) != ""
+    changed = git("status", "--porcelain", "--untracked-files=no", "--", *provenance.SOURCES,
+                  *(f":(exclude){p}" for p in provenance.NOT_IN_A_RUN)) != ""
     assert provenance.same_sources(head) is not changed
     first = git("rev-list", "--max-parents=0", "HEAD").split()[0]
     assert provenance.same_sources(first) is (first == head and not changed)  # (a clone of depth one)
@@ -64,3 +65,18 @@ def test_a_solvers_runs_are_decided_by_its_own_numerics_and_the_common_sources()
     for common in ("cases", "smfem/runs", "smfem/studies", "pyproject.toml"):
         assert common in reference and common in smfem
     assert set(reference) | set(smfem) <= set(provenance.SOURCES) | set(provenance.COMMON)
+
+
+def test_a_change_to_the_plan_alone_leaves_the_runs_made_from_these_sources(monkeypatch):
+    """The plan decides which runs a report asks for and provenance where they came from, not
+    what one gives: the comparison of sources leaves them out, and only them."""
+    asked = []
+    monkeypatch.setattr(provenance, "_git", lambda *args: asked.append(args) or "")
+    provenance.same_sources.cache_clear()
+    assert provenance.same_sources("b" * 40)
+    provenance.same_sources.cache_clear()
+    (args,) = asked
+    assert args[:3] == ("diff", "--quiet", "b" * 40)
+    assert [a for a in args if a.startswith(":(exclude)")] == [":(exclude)smfem/studies/plan.py",
+                                                                ":(exclude)smfem/studies/provenance.py"]
+    assert set(provenance.SOURCES) <= set(args)

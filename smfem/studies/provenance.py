@@ -26,6 +26,10 @@ SOURCES = ("smfem", "reference_fem", "cases", "pyproject.toml")
 #: what decides every run besides its solver's packages: the scenes, the runner that calls the
 #: solver and measures it, the study framework that plans and executes it, the dependencies
 COMMON = ("cases", "smfem/runs", "smfem/studies", "pyproject.toml")
+#: what no run passes through: the plan decides which runs a report asks for (the ladders, where
+#: each stops) and this module where the runs came from, never what a run gives, so a run made
+#: before a change to them is the run the changed framework would make
+NOT_IN_A_RUN = ("smfem/studies/plan.py", "smfem/studies/provenance.py")
 
 
 def sources_of(packages: tuple[str, ...]) -> tuple[str, ...]:
@@ -56,11 +60,11 @@ def commit(paths: tuple[str, ...] = ()) -> str | None:
 def same_sources(made_by: str | None, paths: tuple[str, ...] = SOURCES) -> bool:
     """Whether a run recorded as made by commit ``made_by`` came from the ``paths`` (default: all
     :data:`SOURCES`; one solver's: :func:`sources_of`) that this checkout has now (a commit with
-    changes, or none, is never known to)."""
+    changes, or none, is never known to); :data:`NOT_IN_A_RUN` aside."""
     if not made_by or "+" in made_by:
         return False
     try:
-        _git("diff", "--quiet", made_by, "--", *paths)
+        _git("diff", "--quiet", made_by, "--", *paths, *(f":(exclude){p}" for p in NOT_IN_A_RUN))
     except (OSError, subprocess.SubprocessError):
         return False  # they differ (exit 1), or the commit is unknown here
     return True
