@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from .tables import RANGE, _pct
 from .verdict import VERSUS, scene_rows, summary_table
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,6 +24,8 @@ MARKERS = {"findings": ("<!-- findings: python -m reports.readme -->", "<!-- /fi
            "verdict": ("<!-- verdict table: python -m reports.readme -->", "<!-- /verdict table -->")}
 #: a speed-up cell of the verdict table: bound, number, what it says of itself
 _CELL = re.compile(r"^(?:([<>]) )?([0-9.]+)(?: \((.*)\))?$")
+#: a speed-up's range over the timing pass's repeats, as the headline writes it (``'1.36e+03-4.31e+03'``)
+_RANGE = re.compile(r"([0-9.]+(?:e[+-][0-9]+)?)-([0-9.]+(?:e[+-][0-9]+)?)")
 
 
 def _cell(text: str) -> tuple[str, str, list[str]] | None:
@@ -55,23 +58,24 @@ def spread(head: pd.DataFrame, case: str, solver: str, target: float) -> tuple[f
     """The least and largest speed-up over ``solver`` at ``target`` that the timing pass's repeats
     allow (``smfem_speedup_*_range``: its least CPU over SMFEM's largest, and the other way round)."""
     rows = head[(head["case"] == case) & (head["solver"] == solver)]
-    text = rows[f"smfem_speedup_{round(100 * target)}pct_range"].iloc[0] if len(rows) else None
-    low_high = str(text).split("-") if isinstance(text, str) else []
-    return (float(low_high[0]), float(low_high[1])) if len(low_high) == 2 else None
+    text = rows[f"smfem_speedup_{_pct(target)}{RANGE}"].iloc[0] if len(rows) else None
+    m = _RANGE.fullmatch(text) if isinstance(text, str) else None
+    return (float(m.group(1)), float(m.group(2))) if m else None
 
 
 def _measured(rows, column: int, target: float, head: pd.DataFrame) -> list[tuple[str, str, str, str]]:
     """``(verdict, number as the table shows it, scene and engine, note on its spread)`` of every measured (not bound)
     speed-up over the solver of ``column`` at ``target``, largest first; the verdict is
-    ``faster``, ``slower``, or ``even`` where the repeats' spread (:func:`spread`) reaches either
-    side of one: the host's noise, not the method, decides such a ratio."""
+    ``faster``, ``slower``, or ``even``: within half a per cent (the table says nothing), or where
+    the repeats' spread (:func:`spread`) reaches either side of one, whose side the host's noise,
+    not the method, decides."""
     out = []
     for case, reached, _, cells in rows:
         cell = _cell(cells[column]) if reached == target else None
         if cell and not cell[0]:
             x = float(cell[1])
             low, high = spread(head, case, VERSUS[column][0], target) or (x, x)
-            said = "even" if low < 1 < high or x == 1 else "slower" if "slower" in cell[2] or x < 1 else "faster"
+            said = "even" if low < 1 < high else "slower" if "slower" in cell[2] else "faster" if x >= 1 else "even"
             note = f", its repeats' ratios {low:g}-{high:g}" if said == "even" and low != high else ""
             out.append((x, said, cell[1], scene_prose(case) + _engine(cell[2]), note))
     return [m[1:] for m in sorted(out, reverse=True)]

@@ -411,7 +411,8 @@ FULL_UNTIL = Until(target=0.01, budget_s=900.0)
 
 def carried(studies: tuple[CaseStudy, ...], until: Until = FULL_UNTIL) -> tuple[CaseStudy, ...]:
     """``studies`` with every series of more than one level carried ``until`` (:class:`Until`),
-    or its own where it has one (CalculiX's explicit: :data:`CCX_EXPLICIT_UNTIL`)."""
+    or its own where it has one (CalculiX's explicit: :data:`CCX_EXPLICIT_UNTIL`; the flywheel's
+    3D reference: :data:`FLYWHEEL_3D_UNTIL`)."""
     return tuple(replace(s, series=tuple(replace(x, until=x.until or until) if len(x.levels) > 1 else x
                                          for x in s.series))
                  for s in studies)
