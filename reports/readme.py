@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from .tables import RANGE, _pct
+from .tables import RANGE, pct_label
 from .verdict import VERSUS, scene_rows, summary_table
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -58,7 +58,7 @@ def spread(head: pd.DataFrame, case: str, solver: str, target: float) -> tuple[f
     """The least and largest speed-up over ``solver`` at ``target`` that the timing pass's repeats
     allow (``smfem_speedup_*_range``: its least CPU over SMFEM's largest, and the other way round)."""
     rows = head[(head["case"] == case) & (head["solver"] == solver)]
-    text = rows[f"smfem_speedup_{_pct(target)}{RANGE}"].iloc[0] if len(rows) else None
+    text = rows[f"smfem_speedup_{pct_label(target)}{RANGE}"].iloc[0] if len(rows) else None
     m = _RANGE.fullmatch(text) if isinstance(text, str) else None
     return (float(m.group(1)), float(m.group(2))) if m else None
 

@@ -23,7 +23,8 @@ from smfem.studies.timing import TimingRule
 from smfem.studies.truth import PARTS
 
 
-def _pct(target: float) -> str:
+def pct_label(target: float) -> str:
+    """A target's suffix in the headline's column names: 0.01 -> '1pct'."""
     return f"{100 * target:g}pct"
 
 
@@ -113,13 +114,13 @@ def _cost_columns(an: CaseAnalysis, solver: str, s, costs: dict, mine: dict | No
             text = no_truth or "no truth"
         else:
             text = cost.text()
-        row[f"cpu_s_to_{_pct(target)}"] = text
+        row[f"cpu_s_to_{pct_label(target)}"] = text
     for target, cost in costs.items():
         speed = ""
         if lookup(solver).family != SMFEM and s.status == OK and mine is not None:
             speed = metrics.speedup(cost, mine[target])
-        row[f"smfem_speedup_{_pct(target)}"] = speed
-        row[f"smfem_speedup_{_pct(target)}{RANGE}"] = speedup_range(an, solver, target, cost, mine[target]) if speed else ""
+        row[f"smfem_speedup_{pct_label(target)}"] = speed
+        row[f"smfem_speedup_{pct_label(target)}{RANGE}"] = speedup_range(an, solver, target, cost, mine[target]) if speed else ""
     return row
 
 

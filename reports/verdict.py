@@ -18,15 +18,13 @@ from smfem.runs.registry import lookup, solvers
 from smfem.studies.metrics import TARGETS, TRUTH_TOO_COARSE
 from smfem.studies.plan import SMFEM
 
+from .tables import pct_label
+
 _SPEEDUP = re.compile(r"^([<>]?)\s*([0-9.]+(?:e[+-]?[0-9]+)?)x$")  # 1.05e+03x: a thousand times and more
 _COST = re.compile(r"^([0-9.e+-]+) \((.*)\)$")
 #: the first word of a cost cell's settings (``98.6 (implicit r3 dt2.5e-06)``), or the series a
 #: missed target's cell names (``not reached (best 5.1 %, explicit)``)
 _NAMED = re.compile(r"^(?:[0-9.e+-]+ \((\S+)|not reached \(best [^,)]*, (\S+)\))")
-
-
-def _pct(target: float) -> str:
-    return f"{100 * target:g}pct"
 
 
 def engine(solver: str, cost: str) -> str:
@@ -103,26 +101,26 @@ def sentence(case: str, rows: pd.DataFrame) -> str:
     mine, others = split_smfem(rows)
     if not len(mine):
         return f"{case}: SMFEM has no run in this study."
-    first = [str(c) for c in mine[f"cpu_s_to_{_pct(TARGETS[0])}"]]
+    first = [str(c) for c in mine[f"cpu_s_to_{pct_label(TARGETS[0])}"]]
     if all(c.startswith("not available") for c in first):
         return f"{case}: SMFEM cannot run this scene ({first[0]})."
     best = _best(mine)
     for target in TARGETS:
-        solver, cost = cheapest(mine, f"cpu_s_to_{_pct(target)}")
+        solver, cost = cheapest(mine, f"cpu_s_to_{pct_label(target)}")
         if cost:
             compared = [c for other, row in others.iterrows()
-                        if (c := _comparison(other, row[f"smfem_speedup_{_pct(target)}"],
-                                             row[f"cpu_s_to_{_pct(target)}"]))]
+                        if (c := _comparison(other, row[f"smfem_speedup_{pct_label(target)}"],
+                                             row[f"cpu_s_to_{pct_label(target)}"]))]
             missed = "" if target == TARGETS[0] else _missed(mine)
             there = f": {', '.join(compared)}" if compared else ""
             return (f"{case}: {lookup(solver).prose} reaches {100 * target:g} % total error in {cost.group(1)} s CPU "
                     f"({cost.group(2)}){missed}{there}.")
-    if all(str(c) == TRUTH_TOO_COARSE for t in TARGETS for c in mine[f"cpu_s_to_{_pct(t)}"]):
+    if all(str(c) == TRUTH_TOO_COARSE for t in TARGETS for c in mine[f"cpu_s_to_{pct_label(t)}"]):
         return (f"{case}: no claim: the truth's uncertainty ({mine.truth_uncertainty_pct.iloc[0]:.2g} %) is too "
                 f"coarse to judge {100 * TARGETS[-1]:g} %.")
     last = TARGETS[-1]
     better = [f"{lookup(s).prose} in {m.group(1)} s ({m.group(2)})" for s, row in others.iterrows()
-              if (m := _COST.match(str(row[f"cpu_s_to_{_pct(last)}"])))]
+              if (m := _COST.match(str(row[f"cpu_s_to_{pct_label(last)}"])))]
     tail = f"; {' and '.join(better)} reach{'es' if len(better) == 1 else ''} it" if better else "; no other solver does"
     return f"{case}: SMFEM does not reach {100 * last:g} % in this study (best {_pct_text(best)}){tail}."
 
@@ -131,7 +129,7 @@ def _missed(mine: pd.DataFrame) -> str:
     """Why a verdict at a later target is not at the first: SMFEM's best error is above it, or
     the truth cannot judge it (a scene of the user's own, whose truth the study made)."""
     first = TARGETS[0]
-    if all(str(c) == TRUTH_TOO_COARSE for c in mine[f"cpu_s_to_{_pct(first)}"]):
+    if all(str(c) == TRUTH_TOO_COARSE for c in mine[f"cpu_s_to_{pct_label(first)}"]):
         return (f"; {100 * first:g} % is past what the truth can judge (its uncertainty "
                 f"{mine.truth_uncertainty_pct.iloc[0]:.2g} %)")
     return f", not {100 * first:g} % (best {_pct_text(_best(mine))})"
@@ -169,13 +167,13 @@ def scene_rows(head: pd.DataFrame, vs=VERSUS) -> list[tuple[str, float | None, s
     for case, rows in head.groupby("case", sort=False):
         rows = rows.set_index("solver")
         mine, others = split_smfem(rows)
-        reached = next(((t, c) for t in TARGETS if (c := cheapest(mine, f"cpu_s_to_{_pct(t)}")[1])), None)
+        reached = next(((t, c) for t in TARGETS if (c := cheapest(mine, f"cpu_s_to_{pct_label(t)}")[1])), None)
         if reached is None:
             out.append((case, None, _pct_text(_best(mine)), ["-" for _ in vs]))
             continue
         target, cost = reached
-        cells = [_speedup_cell(others.at[s, f"smfem_speedup_{_pct(target)}"],
-                               engine(s, others.at[s, f"cpu_s_to_{_pct(target)}"])) if s in others.index else "-"
+        cells = [_speedup_cell(others.at[s, f"smfem_speedup_{pct_label(target)}"],
+                               engine(s, others.at[s, f"cpu_s_to_{pct_label(target)}"])) if s in others.index else "-"
                  for s, _ in vs]
         out.append((case, target, cost.group(1), cells))
     return out

@@ -215,11 +215,13 @@ CCX_MODAL = tuple({"refine": r, "modes": m} for r in (1, 2) for m in (50, 100, 2
 #: between r2 and r4, as its CPU grows as the mesh cubed (thick cylinder: r1 3.19 %, 61 CPU s; r2
 #: 1.56 %, 420 s; r3 1.04 %, 1600 s; r4 about 0.8 %, predicted 3400-3800 s)
 CCX_EXPLICIT = tuple({"refine": r} for r in (1, 2, 3, 4))
-#: where CalculiX's explicit series stops: at 1 % as every series, but within 4000 CPU s a run,
-#: not :data:`FULL_UNTIL`'s 900: below 1 % it needs r3 or r4 on the thick, layered and notched
-#: cylinders and the pulse (B_ut and the patch edges converge at first order in the mesh), and a
-#: ccx user after 1 % would run them (docs/verification.md, CalculiX against the exact answer)
-CCX_EXPLICIT_UNTIL = Until(target=0.01, budget_s=4000.0)
+#: where CalculiX's explicit and modal series stop: at 1 % as every series, but within 8000 CPU s a
+#: run, not :data:`FULL_UNTIL`'s 900: below 1 % explicit needs r3 or r4 on the thick, layered and
+#: notched cylinders and the pulse (B_ut and the patch edges converge at first order in the mesh;
+#: r4 on the layered cylinder and the pulse is predicted at 7100-7200 s from r3), modal 800 modes
+#: on the finer mesh where 400 stop at 1.2-2 % (predicted 1500-2100 s), and a ccx user after 1 %
+#: would run them (docs/verification.md, CalculiX against the exact answer)
+CCX_UNTIL = Until(target=0.01, budget_s=8000.0)
 
 
 #: the explicit 3D reference's levels: meshes (its step is its own Courant limit, half the critical
@@ -246,8 +248,8 @@ def calculix(explicit: bool = True, modal: bool = True) -> tuple[Series, ...]:
     or ``modal`` False: plasticity, contact, an initial velocity) is one run, refused in the
     solver's one line, which the report keeps."""
     return (_s(CALCULIX, {}), _s(CALCULIX_EXPLICIT, *(CCX_EXPLICIT if explicit else ({},)),
-                                 until=CCX_EXPLICIT_UNTIL if explicit else None),
-            _s(CALCULIX_MODAL, *(CCX_MODAL if modal else ({},))))
+                                 until=CCX_UNTIL if explicit else None),
+            _s(CALCULIX_MODAL, *(CCX_MODAL if modal else ({},)), until=CCX_UNTIL if modal else None))
 
 
 def installed(*series: Series) -> tuple[Series, ...]:
@@ -411,7 +413,7 @@ FULL_UNTIL = Until(target=0.01, budget_s=900.0)
 
 def carried(studies: tuple[CaseStudy, ...], until: Until = FULL_UNTIL) -> tuple[CaseStudy, ...]:
     """``studies`` with every series of more than one level carried ``until`` (:class:`Until`),
-    or its own where it has one (CalculiX's explicit: :data:`CCX_EXPLICIT_UNTIL`; the flywheel's
+    or its own where it has one (CalculiX's explicit and modal: :data:`CCX_UNTIL`; the flywheel's
     3D reference: :data:`FLYWHEEL_3D_UNTIL`)."""
     return tuple(replace(s, series=tuple(replace(x, until=x.until or until) if len(x.levels) > 1 else x
                                          for x in s.series))
