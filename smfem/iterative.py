@@ -53,6 +53,17 @@ SCREEN_SHARE = 0.3
 KRYLOV_RTOL, KRYLOV_MAX = 1e-3, 500
 
 
+@dataclass
+class FirstIterate:
+    """A step's first iterate ``x`` and its trial stresses, against which the step's later
+    iterations are screened (:mod:`smfem.screening`); ``room``, the trials' headroom, is made
+    when a second iteration asks for it (an elastic step has none)."""
+
+    x: np.ndarray
+    trial: np.ndarray
+    room: np.ndarray | None = None
+
+
 @dataclass(frozen=True)
 class Step:
     """The step being solved: its load ``Q``, the predicted displacement and what applies
@@ -300,7 +311,7 @@ class BlockIterative:
         # iterations per step); the iterations recompute them from the state, so only the start moves
         x = u
         loads = start = 2 * self.loads - self.loads_before
-        first = None  # the step's first iterate, its trial stresses and their headroom, once made
+        first: FirstIterate | None = None
         for iteration in range(1, self.max_iter + 1):
             t0 = tick()
             dx = self.iteration.correction(x, step, loads)
@@ -308,12 +319,12 @@ class BlockIterative:
             t1 = tick()
             visited = None
             if first is not None:  # only where the change since the first iterate may reach the yield surface
-                if first[2] is None:
-                    first[2] = self.screen.room(self.law.headroom(first[1], state.law))
-                moved = x - first[0]
+                if first.room is None:
+                    first.room = self.screen.room(self.law.headroom(first.trial, state.law))
+                moved = x - first.x
                 coefficients = pts.series.coefficients(moved)
-                visited = self.screen.at_risk(coefficients, first[2])
-                if len(visited) > SCREEN_SHARE * first[1].shape[1]:
+                visited = self.screen.at_risk(coefficients, first.room)
+                if len(visited) > SCREEN_SHARE * first.trial.shape[1]:
                     visited = first = None  # most of the body: every point, for the rest of the step
             if visited is None:
                 # the stress of the amplitudes less what the plastic strains took off: the trial
@@ -322,9 +333,9 @@ class BlockIterative:
                 t2 = tick()
                 sigma, law_state = self.law.stress(trial, state.law)
                 if iteration == 1 and self.screen is not None:
-                    first = [x, trial, None]  # its headroom once a second iteration asks
+                    first = FirstIterate(x, trial)
             else:
-                trial = np.take(first[1], visited, axis=1) + pts.stress_at(moved, visited, coefficients)
+                trial = np.take(first.trial, visited, axis=1) + pts.stress_at(moved, visited, coefficients)
                 t2 = tick()
                 sigma, law_state = self.law.stress_at(trial, state.law, visited)
             t3 = tick()

@@ -25,7 +25,7 @@ from cases.material import ELASTIC, VON_MISES, lame, sigma_y_from_tau_s
 from cases.params import UnsupportedCase
 
 from .constitutive import isotropic_D
-from .plasticity import intensity, return_map_rows, von_mises
+from .plasticity import intensity, return_map_rows, von_mises, yield_stress
 
 
 
@@ -63,9 +63,11 @@ class Elastic:
 class PlasticState:
     """Stresses (6, n), the accumulated equivalent plastic strain ``alpha`` (n,), the plastic
     strains at the start of the step and the step's increments at the points that yield (the
-    whole eps_p is formed once, when asked: the iterations need only the increments)."""
+    whole eps_p is formed once, when asked: the iterations need only the increments). ``sigma``
+    is None in a state of :meth:`VonMises.stress_at`, whose iterations make each trial stress
+    from the amplitudes."""
 
-    sigma: np.ndarray
+    sigma: np.ndarray | None
     alpha: np.ndarray
     eps_p0: np.ndarray
     yielding: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
@@ -111,7 +113,7 @@ class VonMises(Elastic):
         """(n,) how far each trial stress is inside the yield surface of the committed
         ``state``, in the von Mises stress (negative where it yields): a trial that moves by
         less stays elastic (:mod:`smfem.screening`)."""
-        return self._limit(state.alpha) - von_mises(trial)
+        return yield_stress(state.alpha, self.sigma_y0, self.H) - von_mises(trial)
 
     def stress_at(self, trial: np.ndarray, state, points: np.ndarray) -> tuple[np.ndarray, PlasticState]:
         """:meth:`stress` at ``points`` (k,) only, ``trial`` (6, k) theirs: every other point
@@ -126,9 +128,6 @@ class VonMises(Elastic):
             alpha_all = alpha_all.copy()
             alpha_all[points[at]] = alpha[at]
         return sigma, PlasticState(None, alpha_all, state.eps_p, points[at], deps_p)
-
-    def _limit(self, alpha: np.ndarray) -> np.ndarray:
-        return self.sigma_y0 + self.H * alpha if np.any(self.H) else np.broadcast_to(self.sigma_y0, alpha.shape)
 
 
 #: law name -> ``(material, factor) -> law``

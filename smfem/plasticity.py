@@ -81,6 +81,13 @@ def wilkins(trial: np.ndarray, alpha: np.ndarray, mu: np.ndarray, sigma_y0: floa
     return back(sigma), alpha_new.reshape(shape), back(deps_p), yielding.reshape(shape)
 
 
+def yield_stress(alpha: np.ndarray, sigma_y0, H):
+    """The yield stress in von Mises' measure after hardening ``alpha`` (n,): ``sigma_y0 + H alpha``,
+    or ``sigma_y0`` as it is (a scalar, or one per point) where no point hardens: the law's
+    hot path then squares no array of equal values."""
+    return sigma_y0 + H * alpha if np.any(H) else sigma_y0
+
+
 def return_map_rows(trial: np.ndarray, alpha: np.ndarray, mu: np.ndarray, sigma_y0: float, H: float):
     """Wilkins' correction of stresses stored rows first, ``(6, n)``, at the points that yield
     only: the yield test is a few operations per point, the return runs on the few that yield.
@@ -89,7 +96,7 @@ def return_map_rows(trial: np.ndarray, alpha: np.ndarray, mu: np.ndarray, sigma_
     of the yielding points and their plastic strain increments ``(6, n_yielding)``.
     """
     T2 = _shear_squared(trial)
-    limit = sigma_y0 + H * alpha if np.any(H) else sigma_y0
+    limit = yield_stress(alpha, sigma_y0, H)
     at = np.flatnonzero(3.0 * T2 > limit * limit)
     if not len(at):
         return trial, alpha, at, np.zeros((6, 0))
