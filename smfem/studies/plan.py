@@ -425,14 +425,18 @@ def full() -> tuple[CaseStudy, ...]:
     or more, every series carried along its ladder to 1 % or its CPU budget (:data:`FULL_UNTIL`),
     with every level of the quick study's series (:func:`with_quick_levels`) and each time-stepping
     ladder's space levels also at twice their longest step (:func:`with_longer_step`)."""
-    longer = tuple(replace(s, series=tuple(with_longer_step(s.case, x) for x in s.series)) for s in _full_studies())
-    return carried(with_quick_levels(longer, _quick_studies()))
+    return carried(with_quick_levels(_each_series(_full_studies(), with_longer_step), _quick_studies()))
 
 
-def _same_level(case: str, level: dict) -> dict:
-    """``level`` with the case's defaults it leaves out (``refine`` 1, the case's ``dt``): two
+def _each_series(studies: tuple[CaseStudy, ...], change) -> tuple[CaseStudy, ...]:
+    """``studies`` with each series replaced by ``change(case, series)``."""
+    return tuple(replace(s, series=tuple(change(s.case, x) for x in s.series)) for s in studies)
+
+
+def _filled(level: dict, dt: float) -> dict:
+    """``level`` with the defaults it leaves out (``refine`` 1, the case's step ``dt``): two
     levels that make the same run compare equal."""
-    return {"refine": 1, "dt": get_case(case).dt, **level}
+    return {"refine": 1, "dt": dt, **level}
 
 
 def with_quick_levels(studies: tuple[CaseStudy, ...], quick_studies: tuple[CaseStudy, ...]) -> tuple[CaseStudy, ...]:
@@ -440,16 +444,18 @@ def with_quick_levels(studies: tuple[CaseStudy, ...], quick_studies: tuple[CaseS
     solver and options lacks: a ladder runs its levels cheapest first, so the full report never
     misses a cheaper run to a target that the quick report makes (its 3D dome at twice the
     step: 3.4 % in 2.9 CPU s, where the full ladder's cheapest to 5 % was r2 at 148 s)."""
-    quick_of = {q.case: q for q in quick_studies}
+    quick_of = {q.case: q.series for q in quick_studies}
 
     def added(case: str, series: Series) -> Series:
-        have = [_same_level(case, level) for level in series.levels]
-        extra = [level for q in (quick_of[case].series if case in quick_of else ())
-                 if (q.solver, q.options) == (series.solver, series.options)
-                 for level in q.levels if _same_level(case, level) not in have]
-        return replace(series, levels=(*series.levels, *extra)) if extra and len(series.levels) > 1 else series
+        if len(series.levels) < 2:
+            return series
+        dt = get_case(case).dt
+        have = [_filled(level, dt) for level in series.levels]
+        extra = [level for q in quick_of.get(case, ()) if (q.solver, q.options) == (series.solver, series.options)
+                 for level in q.levels if _filled(level, dt) not in have]
+        return replace(series, levels=(*series.levels, *extra))
 
-    return tuple(replace(s, series=tuple(added(s.case, x) for x in s.series)) for s in studies)
+    return _each_series(studies, added)
 
 
 def with_longer_step(case: str, series: Series) -> Series:
@@ -460,13 +466,13 @@ def with_longer_step(case: str, series: Series) -> Series:
     case's step in 0.39 CPU s, 1.05 s at the case's)."""
     if len(series.levels) < 2 or lookup(series.solver).courant or not any("dt" in level for level in series.levels):
         return series
+    dt = get_case(case).dt
     longest: dict[tuple, float] = {}
     for level in series.levels:
-        full_level = _same_level(case, level)
-        space = tuple(sorted((k, v) for k, v in full_level.items() if k != "dt"))
-        longest[space] = max(longest.get(space, 0.0), full_level["dt"])
-    extra = tuple({**dict(space), "dt": 2 * dt} for space, dt in longest.items())
-    return replace(series, levels=(*series.levels, *extra))
+        filled = _filled(level, dt)
+        space = tuple(sorted((k, v) for k, v in filled.items() if k != "dt"))
+        longest[space] = max(longest.get(space, 0.0), filled["dt"])
+    return replace(series, levels=(*series.levels, *({**dict(space), "dt": 2 * step} for space, step in longest.items())))
 
 
 def _full_studies() -> tuple[CaseStudy, ...]:
