@@ -160,7 +160,10 @@ def time_headline(analyses: list[CaseAnalysis], rule: TimingRule = TimingRule(),
     did during the pass); ``retime_options``: :func:`smfem.studies.timing.retime`'s ``run``."""
     chosen = {an.case.name: contenders(decisive(an), rule.rivals) for an in analyses}
     timed = [[run for run in runs.values() if not rule.kept(study_shot(run))] for runs in chosen.values()]
-    passlog = PassLog(log, rule, retime_options.pop("run", None) or HostGate(waits=0)) if log is not None else None
+    gate = retime_options.get("run") or (HostGate(waits=0) if log is not None else None)
+    if isinstance(gate, HostGate):  # a cheap batch need not wait for a quiet host
+        gate.expected = {run.job: study_shot(run) for runs in timed for run in runs}
+    passlog = PassLog(log, rule, gate) if log is not None else None
     if passlog is not None:
         retime_options["run"] = passlog
         if passlog.resumed and progress:

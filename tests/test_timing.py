@@ -148,8 +148,9 @@ def test_a_stopped_pass_resumes_from_its_log_and_a_log_of_another_boot_or_source
 
 
 def test_a_batch_waits_for_the_hosts_memory_speed_to_come_back_within_the_slack():
-    """reports.host_gate.HostGate: a batch is timed once the memory probe is within 10 % of the
-    best the pass has seen, after waiting out a slow spell (at most ``waits`` times)."""
+    """reports.host_gate.HostGate: a batch is timed once the memory probe is within the slack
+    (25 %) of the best the pass has seen, after waiting out a slow spell (at most ``waits``
+    times); a batch expected to be cheap is timed at once."""
     from reports.host_gate import HostGate, memory_probe
 
     probes, slept, ran = iter([1.0, 1.5, 1.3, 1.05, 2.0, 2.0, 2.0]), [], []
@@ -165,4 +166,13 @@ def test_a_batch_waits_for_the_hosts_memory_speed_to_come_back_within_the_slack(
                      probe=iter([1.0] + [2.0] * 20).__next__, sleep=slept.append)
     spent("a", 1), spent("b", 1), spent("c", 1)
     assert (spent.waited_s, spent.last_waits) == (40.0, 0) and len(slept) == 6
+    # a batch expected under worth_s (its study shot times its repeats) does not wait for a slow host
+    cheap = HostGate(run=lambda job, n: [0.5] * n, waits=6, wait_s=20.0, worth_s=2.0,
+                     probe=iter([1.0, 2.0, 2.0, 2.0, 1.0]).__next__, sleep=slept.append)
+    cheap.expected = {"short": 0.5, "long": 1.5}
+    slept.clear()
+    cheap("short", 1), cheap("short", 3)
+    assert (cheap.last_probe, cheap.last_waits, slept) == (2.0, 0, [])
+    cheap("long", 2)  # 3 s expected: it waits out the slow probe
+    assert (cheap.last_probe, cheap.last_waits, slept) == (1.0, 2, [20.0, 20.0])
     assert 0 < memory_probe(1) < 1.0  # the real probe: a stream through 64 MB and back
