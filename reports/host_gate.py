@@ -10,9 +10,10 @@ each batch the worker streams a fixed array through memory (:func:`memory_probe`
 takes more than :attr:`HostGate.slack` over the least the pass has seen, the pass waits and
 probes again, up to :attr:`HostGate.waits` times, then times the batch anyway. Only a batch
 expected to take :data:`WORTH_WAITING_S` or more waits: a short run's least repeat among many
-finds a quiet moment by itself, and a pass whose budget the cheap runs spent (a quick report's
-retime spent its 30 minutes on its first 25 batches, 2026-11-30) times the dear, memory-bound
-runs, the ones that disagreed, on whatever host it finds. The slack sits above the probe's own
+finds a quiet moment by itself, and a pass whose budget the cheap runs spent times the dear,
+memory-bound runs, the ones that disagreed, on whatever host it finds (a quick report's retime,
+2026-11-30, spent its 30 minutes within its first sweep, 24 batches waiting, a 0.4 s CalculiX run
+six times among them). The slack sits above the probe's own
 scatter on a quiet host (160 probes of one pass: best 9.1 ms, median 10.7, 90th percentile 15.3,
 most 21.7): at 10 % most probes waited. Each batch's probe goes into
 ``tables/timing_repeats.csv``, so what the host did stays on record.
