@@ -13,6 +13,7 @@ whose shot is several times the other's keeps its shot, as its row's cost, outsi
 
 from __future__ import annotations
 
+import hashlib
 import json
 import time
 from dataclasses import asdict, replace
@@ -23,6 +24,7 @@ import pandas as pd
 
 from smfem.runs.registry import headline_name, lookup
 from smfem.studies import provenance
+from smfem.studies import timing as studies_timing
 from smfem.studies.cache import Run, key_of
 from smfem.studies.jobs import OK
 from smfem.studies.metrics import REACHED
@@ -95,13 +97,15 @@ class PassLog:
     a pass stopped half way (a full report's pass takes hours: its dearest runs are timed once
     each, CalculiX's for over an hour) resumes where it stopped: a resumed pass replays the logged
     batches in the order the pass asks for them, then times the rest. A log is taken up only
-    when it was made on this boot of this machine, by the same rule, from the same
-    :data:`~smfem.studies.provenance.SOURCES`; else it is started anew. The pass removes it
+    when it was made on this boot of this machine, by the same rule and timing module, from the
+    same :data:`~smfem.studies.provenance.SOURCES`; else it is started anew. The pass removes it
     when it finishes (:func:`time_headline`): a later pass, a ``--retime``, times afresh."""
 
     def __init__(self, path: Path, rule: TimingRule, run=in_one_worker):
         self.path, self.run = Path(path), run
-        self.header = {"rule": asdict(rule), "boot": boot(), "commit": provenance.commit(provenance.SOURCES)}
+        self.header = {"rule": asdict(rule), "boot": boot(), "commit": provenance.commit(provenance.SOURCES),
+                       # the timing module is no run's source (provenance.NOT_IN_A_RUN), but it takes the repeats
+                       "timer": hashlib.sha256(Path(studies_timing.__file__).read_bytes()).hexdigest()[:16]}
         self.logged: dict[str, list[dict]] = {}
         #: the pass's batches in the order it asked for them (logged ones replayed among them)
         self.batches: list[dict] = []
@@ -115,7 +119,7 @@ class PassLog:
             self.path.write_text(json.dumps(self.header) + "\n")
 
     def _resumable(self, header: dict) -> bool:
-        same = {k: header.get(k) for k in ("rule", "boot")} == {k: self.header[k] for k in ("rule", "boot")}
+        same = {k: header.get(k) for k in ("rule", "boot", "timer")} == {k: self.header[k] for k in ("rule", "boot", "timer")}
         return same and bool(header["boot"]) and provenance.same_sources(header.get("commit"))
 
     @property

@@ -68,8 +68,9 @@ def test_a_solvers_runs_are_decided_by_its_own_numerics_and_the_common_sources()
 
 
 def test_a_change_to_the_plan_alone_leaves_the_runs_made_from_these_sources(monkeypatch):
-    """The plan decides which runs a report asks for and provenance where they came from, not
-    what one gives: the comparison of sources leaves them out, and only them."""
+    """The plan decides which runs a report asks for, provenance where they came from and the
+    timing pass how often the decisive ones are timed again, not what one gives: the comparison
+    of sources leaves them out, and only them."""
     asked = []
     monkeypatch.setattr(provenance, "_git", lambda *args: asked.append(args) or "")
     provenance.same_sources.cache_clear()
@@ -78,5 +79,6 @@ def test_a_change_to_the_plan_alone_leaves_the_runs_made_from_these_sources(monk
     (args,) = asked
     assert args[:3] == ("diff", "--quiet", "b" * 40)
     assert [a for a in args if a.startswith(":(exclude)")] == [":(exclude)smfem/studies/plan.py",
-                                                                ":(exclude)smfem/studies/provenance.py"]
+                                                                ":(exclude)smfem/studies/provenance.py",
+                                                                ":(exclude)smfem/studies/timing.py"]
     assert set(provenance.SOURCES) <= set(args)

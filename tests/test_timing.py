@@ -8,26 +8,44 @@ is the structure: enough repeats, and each speed-up the ratio of its two minima.
 
 from __future__ import annotations
 
+import json
+
 from smfem.cli import main
 from smfem.studies.jobs import Job
 from smfem.studies.timing import Timing, TimingRule, retime
 
 
 def test_a_run_is_done_at_three_repeats_and_two_cpu_seconds_and_a_long_one_once_or_twice():
-    rule = TimingRule(budget_s=200.0)
+    rule = TimingRule(budget_s=200.0, settle_s=None)
     assert not rule.done([], 0.0)
     assert not rule.done([1.0, 1.0], 2.0) and rule.done([1.0, 1.0, 1.0], 3.0)
     assert not rule.done([0.1] * 19, 1.9) and rule.done([0.1] * 20, 2.0)
     assert not rule.done([61.0], 61.0) and rule.done([61.0, 60.5], 121.5)
     assert rule.done([61.0], 61.0 + 80.0)  # a second timing would pass the budget
-    # the minimum must hold: a second repeat within 5 % of it, up to nine repeats or the budget
+    # the minimum must hold: a second repeat within 5 % of it, up to the most repeats or the budget
     assert not rule.done([1.0, 1.3, 1.4], 3.7) and rule.done([1.0, 1.3, 1.4, 1.04], 4.74)
-    assert not rule.done([1.0] + [1.3] * 7, 10.1) and rule.done([1.0] + [1.3] * 8, 11.4)
+    assert not rule.done([1.0] + [1.3] * 28, 37.4) and rule.done([1.0] + [1.3] * 29, 38.7)
     assert rule.done([1.0, 1.3, 1.4], 201.0)
     assert rule.batch([], 0) == 1 and rule.batch([5.0], 1) == 1
     # a 10 ms run wants 199 more: shared among the three sweeps left, all at once in the last
     assert rule.batch([0.01], 1) == 67 and rule.batch([0.01], 3) == 199 and rule.batch([0.01], 9) == 199
     assert rule.batch([0.2] * 9, 2) == 1 and rule.batch([0.01] * 190, 2) == 5
+
+
+def test_a_full_passs_run_settles_over_thirty_cpu_seconds_or_thirty_repeats_whatever_the_budget():
+    """A short run's least settles only over many repeats (on this host one repeat in six to ten
+    lies within 5 % of it): a full pass and a retime time a run to 30 CPU s or 30 repeats, past a
+    held minimum and a spent budget; a quick one stops at its floor, for its ten minutes."""
+    full, quick = TimingRule.of(True, budget_s=200.0), TimingRule.of(False, budget_s=200.0)
+    assert quick.done([0.5, 0.5, 0.5, 0.5], 2.0) and quick.batch([0.5], 1) == 1
+    assert not full.done([0.5] * 29, 500.0) and full.done([0.5] * 30, 15.0)  # the most repeats
+    assert not full.done([2.0] * 14, 500.0) and full.done([2.0] * 15, 30.0)  # 30 CPU s, held
+    assert not full.done([20.0, 20.0], 40.0) and full.done([20.0] * 3, 60.0)  # a dear run: the floor
+    assert not full.done([2.0] + [3.0] * 15, 47.0) and full.done([2.0] + [3.0] * 15, 500.0)  # not held: the budget
+    assert full.done([0.01] * 200, 2.0)  # the floor's 2 CPU s take past the most repeats
+    # what it still wants, shared among the sweeps left: 29 repeats of a 0.5 s run, 14 of 2 s
+    assert full.batch([0.5], 1) == 10 and full.batch([0.5], 3) == 29 and full.batch([2.0], 3) == 14
+    assert full.batch([0.01], 1) == 67  # the floor's 199 repeats, past the settling's 29
 
 
 def test_a_scenes_runs_are_timed_by_turns_in_sweeps_over_every_scene_until_the_rule_holds():
@@ -43,7 +61,8 @@ def test_a_scenes_runs_are_timed_by_turns_in_sweeps_over_every_scene_until_the_r
     timings = retime([[smfem, other], [third], [fast]], TimingRule(budget_s=200.0), run=run, progress=False)
     # sweep 1 times each run once, scene by scene, the scene's runs by turns; sweep 2 comes back
     assert [job for job, _ in calls[:6]] == [smfem, other, third, fast, smfem, other]
-    assert [timings[j].repeats for j in (smfem, other, third, fast)] == [4, 3, 2, 200]
+    # to 30 repeats (0.5 s) or 30 CPU s (1.5 s), the floor's 2 CPU s (10 ms), a long run twice
+    assert [timings[j].repeats for j in (smfem, other, third, fast)] == [30, 20, 2, 200]
     # the 10 ms run's repeats are spread over the four sweeps, not taken in one go
     assert [n for job, n in calls if job is fast] == [1, 67, 66, 66]
     timings = retime([[third]], TimingRule(budget_s=100.0), run=run, progress=False)
@@ -145,6 +164,14 @@ def test_a_stopped_pass_resumes_from_its_log_and_a_log_of_another_boot_or_source
         assert timing.PassLog(path, other_rule, run).resumed == 0
         monkeypatch.setattr(timing, "boot", lambda: "boot-1")
         monkeypatch.setattr(timing.provenance, "commit", lambda *paths: "abc")
+    # nor is a log the timing module took otherwise (it is no run's source, but it takes the repeats)
+    calls.clear()
+    with pytest.raises(Stopped):
+        retime([jobs[:2], jobs[2:]], rule, run=timing.PassLog(path, rule, stops_after_four), progress=False)
+    lines = path.read_text().splitlines()
+    assert timing.PassLog(path, rule, run).resumed > 0
+    path.write_text("\n".join([json.dumps(dict(json.loads(lines[0]), timer="another")), *lines[1:]]) + "\n")
+    assert timing.PassLog(path, rule, run).resumed == 0
 
 
 def test_a_batch_waits_for_the_hosts_memory_speed_to_come_back_within_the_slack():

@@ -27,9 +27,11 @@ SOURCES = ("smfem", "reference_fem", "cases", "pyproject.toml")
 #: solver and measures it, the study framework that plans and executes it, the dependencies
 COMMON = ("cases", "smfem/runs", "smfem/studies", "pyproject.toml")
 #: what no run passes through: the plan decides which runs a report asks for (the ladders, where
-#: each stops) and this module where the runs came from, never what a run gives, so a run made
-#: before a change to them is the run the changed framework would make
-NOT_IN_A_RUN = ("smfem/studies/plan.py", "smfem/studies/provenance.py")
+#: each stops), this module where the runs came from and the timing pass how often the decisive
+#: ones are timed again (its times are the last pass's, its log resumed only by the same rule and
+#: module: ``reports.timing``), never what a run gives, so a run made before a change to them is
+#: the run the changed framework would make
+NOT_IN_A_RUN = ("smfem/studies/plan.py", "smfem/studies/provenance.py", "smfem/studies/timing.py")
 
 
 def sources_of(packages: tuple[str, ...]) -> tuple[str, ...]:

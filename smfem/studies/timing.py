@@ -8,8 +8,12 @@ sweeps, and a run's repeats are spread over at least :attr:`TimingRule.sweeps` o
 minimum is taken over the whole pass, not over the minute its scene happened to meet; within a
 scene the runs are interleaved (SMFEM, competitor, SMFEM, competitor, ...) so that a drift of
 the host hits both sides of a ratio. Each run is repeated until it has
-:attr:`TimingRule.repeats` repeats and :attr:`TimingRule.total_s` CPU s in all, and a second
-repeat within :attr:`TimingRule.hold` of its minimum (a minimum seen once is luck); a run over
+:attr:`TimingRule.repeats` repeats and :attr:`TimingRule.total_s` CPU s in all; a full report's
+and a retime's run also until :attr:`TimingRule.settle_s` CPU s or :attr:`TimingRule.max_repeats`
+repeats, and a second repeat within :attr:`TimingRule.hold` of its minimum (a minimum seen once
+is luck). On this project's shared host a short run's repeats scatter over up to twice its
+least, and only one in six to ten lies within 5 % of it: a least of three or four repeats then
+moves by a fifth from one pass to the next, a least of thirty by a few per cent; a run over
 :attr:`TimingRule.long_s` is timed once, and once more while the pass stays within
 :attr:`TimingRule.budget_s`. The CPU time is the
 solve's process time as the run measured it in the study (``RunResult.cpu_time_s``, one BLAS
@@ -43,11 +47,16 @@ class TimingRule:
     repeats: int = 3
     #: ... and at least this much CPU in all, s
     total_s: float = 2.0
+    #: ... and (None: not) at least this much CPU in all, s, up to :attr:`max_repeats`: the least of
+    #: a short run's repeats settles only over many (40 interleaved repeats of four 0.04-1 s runs on
+    #: an idle host, 2026-11-30: 10-17 % of them within 5 % of their least, 28-42 % within 10 %;
+    #: two retimes at three or four repeats a run moved single runs' least by up to 39 %) ...
+    settle_s: float | None = 30.0
     #: ... and its minimum must hold: a second repeat within this share of it (a lone fast repeat,
     #: 0.74 of its run's median, moved a speed-up by a third from one pass to the next) ...
     hold: float = 0.05
-    #: ... until this many repeats, or the pass's CPU passes :attr:`budget_s`
-    max_repeats: int = 9
+    #: ... until this many repeats, or (past :attr:`settle_s`) the pass's CPU passes :attr:`budget_s`
+    max_repeats: int = 30
     #: a run over this many CPU s is timed once ...
     long_s: float = 60.0
     #: ... and once more while the whole pass's CPU, with that repeat, stays within this, s
@@ -82,7 +91,7 @@ class TimingRule:
             return cls(budget_s=budget_s)
         # nor does a quick one wait for a minimum to hold: on a shared host a third of its runs
         # then went to nine repeats, and the pass to over eight minutes
-        return cls(budget_s=budget_s, kept_s=10.0, max_repeats=cls.repeats, rivals=3.0)
+        return cls(budget_s=budget_s, kept_s=10.0, settle_s=None, max_repeats=cls.repeats, rivals=3.0)
 
     def done(self, times: list[float], spent: float) -> bool:
         """Whether a run timed ``times`` (CPU s) needs no more repeats, ``spent`` CPU s into the pass."""
@@ -92,7 +101,11 @@ class TimingRule:
             return len(times) >= 2 or spent + times[0] > self.budget_s
         if len(times) < self.repeats or sum(times) < self.total_s:
             return False
-        return self.held(times) or len(times) >= self.max_repeats or spent > self.budget_s
+        if len(times) >= self.max_repeats:
+            return True
+        if self.settle_s is not None and sum(times) < self.settle_s:
+            return False
+        return self.held(times) or spent > self.budget_s
 
     def held(self, times: list[float]) -> bool:
         """Whether two of ``times`` lie within :attr:`hold` of their minimum."""
@@ -100,11 +113,14 @@ class TimingRule:
 
     def batch(self, times: list[float], sweep: int) -> int:
         """How many repeats to take in sweep ``sweep`` (from 0) after ``times``: one before the
-        run's time is known, then what is still wanted shared among the sweeps left."""
+        run's time is known, then what is still wanted shared among the sweeps left (the repeats
+        and CPU s a run needs, then up to :attr:`settle_s` within :attr:`max_repeats`)."""
         if not times:
             return 1
-        wanted = max(self.repeats - len(times), math.ceil((self.total_s - sum(times)) / min(times)), 1)
-        return math.ceil(wanted / max(self.sweeps - sweep, 1))
+        needed = max(self.repeats - len(times), math.ceil((self.total_s - sum(times)) / min(times)))
+        settling = 0 if self.settle_s is None else min(math.ceil((self.settle_s - sum(times)) / min(times)),
+                                                       self.max_repeats - len(times))
+        return math.ceil(max(needed, settling, 1) / max(self.sweeps - sweep, 1))
 
 
 @dataclass(frozen=True)
