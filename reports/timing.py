@@ -119,7 +119,8 @@ class PassLog:
             self.path.write_text(json.dumps(self.header) + "\n")
 
     def _resumable(self, header: dict) -> bool:
-        same = {k: header.get(k) for k in ("rule", "boot", "timer")} == {k: self.header[k] for k in ("rule", "boot", "timer")}
+        keys = ("rule", "boot", "timer")
+        same = {k: header.get(k) for k in keys} == {k: self.header[k] for k in keys}
         return same and bool(header["boot"]) and provenance.same_sources(header.get("commit"))
 
     @property
