@@ -16,7 +16,7 @@ from smfem.studies.timing import Timing, TimingRule, retime
 
 
 def test_a_run_is_done_at_three_repeats_and_two_cpu_seconds_and_a_long_one_once_or_twice():
-    rule = TimingRule(budget_s=200.0, settle_s=None)
+    rule = TimingRule(budget_s=200.0, settle_s=None, sweeps=4)
     assert not rule.done([], 0.0)
     assert not rule.done([1.0, 1.0], 2.0) and rule.done([1.0, 1.0, 1.0], 3.0)
     assert not rule.done([0.1] * 19, 1.9) and rule.done([0.1] * 20, 2.0)
@@ -40,12 +40,14 @@ def test_a_full_passs_run_settles_over_thirty_cpu_seconds_or_thirty_repeats_what
     assert quick.done([0.5, 0.5, 0.5, 0.5], 2.0) and quick.batch([0.5], 1) == 1
     assert not full.done([0.5] * 29, 500.0) and full.done([0.5] * 30, 15.0)  # the most repeats
     assert not full.done([2.0] * 14, 500.0) and full.done([2.0] * 15, 30.0)  # 30 CPU s, held
-    assert not full.done([20.0, 20.0], 40.0) and full.done([20.0] * 3, 60.0)  # a dear run: the floor
+    assert not full.done([20.0] * 9, 180.0) and full.done([20.0] * 10, 200.0)  # a dear run: ten repeats
     assert not full.done([2.0] + [3.0] * 15, 47.0) and full.done([2.0] + [3.0] * 15, 500.0)  # not held: the budget
     assert full.done([0.01] * 200, 2.0)  # the floor's 2 CPU s take past the most repeats
-    # what it still wants, shared among the sweeps left: 29 repeats of a 0.5 s run, 14 of 2 s
-    assert full.batch([0.5], 1) == 10 and full.batch([0.5], 3) == 29 and full.batch([2.0], 3) == 14
-    assert full.batch([0.01], 1) == 67  # the floor's 199 repeats, past the settling's 29
+    # what it still wants, shared among the ten sweeps' nine left or seven: 29 repeats of a 0.5 s
+    # run, 14 of 2 s, 9 of 20 s (one a sweep: ten moments of the host)
+    assert full.batch([0.5], 1) == 4 and full.batch([0.5], 3) == 5 and full.batch([2.0], 3) == 2
+    assert full.batch([20.0], 1) == 1 and full.batch([20.0] * 9, 9) == 1
+    assert full.batch([0.01], 1) == 23  # the floor's 199 repeats, past the settling's 29
 
 
 def test_a_scenes_runs_are_timed_by_turns_in_sweeps_over_every_scene_until_the_rule_holds():
@@ -63,8 +65,8 @@ def test_a_scenes_runs_are_timed_by_turns_in_sweeps_over_every_scene_until_the_r
     assert [job for job, _ in calls[:6]] == [smfem, other, third, fast, smfem, other]
     # to 30 repeats (0.5 s) or 30 CPU s (1.5 s), the floor's 2 CPU s (10 ms), a long run twice
     assert [timings[j].repeats for j in (smfem, other, third, fast)] == [30, 20, 2, 200]
-    # the 10 ms run's repeats are spread over the four sweeps, not taken in one go
-    assert [n for job, n in calls if job is fast] == [1, 67, 66, 66]
+    # the 10 ms run's repeats are spread over the ten sweeps, not taken in one go
+    assert [n for job, n in calls if job is fast] == [1, 23] + [22] * 8
     timings = retime([[third]], TimingRule(budget_s=100.0), run=run, progress=False)
     assert timings[third].repeats == 1  # over a minute, and a second timing would pass the budget
 

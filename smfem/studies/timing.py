@@ -9,15 +9,16 @@ minimum is taken over the whole pass, not over the minute its scene happened to 
 scene the runs are interleaved (SMFEM, competitor, SMFEM, competitor, ...) so that a drift of
 the host hits both sides of a ratio. Each run is repeated until it has
 :attr:`TimingRule.repeats` repeats and :attr:`TimingRule.total_s` CPU s in all; a full report's
-and a retime's run also until :attr:`TimingRule.settle_s` CPU s or :attr:`TimingRule.max_repeats`
-repeats, and a second repeat within :attr:`TimingRule.hold` of its minimum (a minimum seen once
-is luck). On this project's shared host a short run's repeats scatter over up to twice its
-least, and only one in six to ten lies within 5 % of it: a least of three or four repeats then
-moves by a fifth from one pass to the next, a least of thirty by a few per cent; a run over
-:attr:`TimingRule.long_s` is timed once, and once more while the pass stays within
-:attr:`TimingRule.budget_s`. The CPU time is the
-solve's process time as the run measured it in the study (``RunResult.cpu_time_s``, one BLAS
-thread); which runs decide the headline is the report's to say (:mod:`reports.timing`).
+and a retime's run also until :attr:`TimingRule.settle_s` CPU s and
+:attr:`TimingRule.settle_repeats` repeats or :attr:`TimingRule.max_repeats` repeats, and a
+second repeat within :attr:`TimingRule.hold` of its minimum (a minimum seen once is luck). On
+this project's shared host a short run's repeats scatter over up to twice its least, and only
+one in six to ten lies within 5 % of it: a least of three or four repeats then moves by a fifth
+from one pass to the next, a least of thirty by a few per cent, and a 4-25 s run's least of
+three by as much (a fifth of its repeats within 5 % of it); a run over :attr:`TimingRule.long_s`
+is timed once, and once more while the pass stays within :attr:`TimingRule.budget_s`. The CPU
+time is the solve's process time as the run measured it in the study (``RunResult.cpu_time_s``,
+one BLAS thread); which runs decide the headline is the report's to say (:mod:`reports.timing`).
 """
 
 from __future__ import annotations
@@ -52,6 +53,12 @@ class TimingRule:
     #: an idle host, 2026-11-30: 10-17 % of them within 5 % of their least, 28-42 % within 10 %;
     #: two retimes at three or four repeats a run moved single runs' least by up to 39 %) ...
     settle_s: float | None = 30.0
+    #: ... and (with :attr:`settle_s`) at least this many repeats up to :attr:`max_repeats`, a run
+    #: under :attr:`long_s` too: a dear run's least of three moved by a fifth between two retimes
+    #: (the notched strip's 3D reference 18.3 and 22.1 s, SMFEM's quad9 on the notched cylinder 7.6
+    #: and 6.1 s at four and five), and only one in five of its repeats lay within 5 % of the
+    #: least of both passes (116 repeats of thirteen 4-25 s runs, 2026-11-30) ...
+    settle_repeats: int = 10
     #: ... and its minimum must hold: a second repeat within this share of it (a lone fast repeat,
     #: 0.74 of its run's median, moved a speed-up by a third from one pass to the next) ...
     hold: float = 0.05
@@ -64,8 +71,10 @@ class TimingRule:
     #: a run's repeats are spread over at least this many sweeps of the pass (over every scene),
     #: the repeats of a sweep going to the worker together: a host that slows for a minute then
     #: raises one sweep's times, not a run's minimum (two passes whose scenes each met their own
-    #: minute of the host disagreed by up to 1.6 times)
-    sweeps: int = 4
+    #: minute of the host disagreed by up to 1.6 times; a batch's repeats keep one another's pace,
+    #: 49-51 ms ten times in one batch, 33-44 in the next), so a dear run's ten repeats meet ten
+    #: moments of the host
+    sweeps: int = 10
     #: a run whose study shot took over this many CPU s is not timed again: the shot stands, as
     #: zero repeats (the quick report: its dearest competitor runs, 7 of 43, would take 137 of the
     #: pass's 330 CPU s and bring the report past ten minutes); None: every run is timed
@@ -91,7 +100,7 @@ class TimingRule:
             return cls(budget_s=budget_s)
         # nor does a quick one wait for a minimum to hold: on a shared host a third of its runs
         # then went to nine repeats, and the pass to over eight minutes
-        return cls(budget_s=budget_s, kept_s=10.0, settle_s=None, max_repeats=cls.repeats, rivals=3.0)
+        return cls(budget_s=budget_s, kept_s=10.0, settle_s=None, max_repeats=cls.repeats, rivals=3.0, sweeps=4)
 
     def done(self, times: list[float], spent: float) -> bool:
         """Whether a run timed ``times`` (CPU s) needs no more repeats, ``spent`` CPU s into the pass."""
@@ -103,7 +112,7 @@ class TimingRule:
             return False
         if len(times) >= self.max_repeats:
             return True
-        if self.settle_s is not None and sum(times) < self.settle_s:
+        if self.settle_s is not None and (sum(times) < self.settle_s or len(times) < self.settle_repeats):
             return False
         return self.held(times) or spent > self.budget_s
 
@@ -114,11 +123,13 @@ class TimingRule:
     def batch(self, times: list[float], sweep: int) -> int:
         """How many repeats to take in sweep ``sweep`` (from 0) after ``times``: one before the
         run's time is known, then what is still wanted shared among the sweeps left (the repeats
-        and CPU s a run needs, then up to :attr:`settle_s` within :attr:`max_repeats`)."""
+        and CPU s a run needs, then up to :attr:`settle_s` and :attr:`settle_repeats` within
+        :attr:`max_repeats`)."""
         if not times:
             return 1
         needed = max(self.repeats - len(times), math.ceil((self.total_s - sum(times)) / min(times)))
-        settling = 0 if self.settle_s is None else min(math.ceil((self.settle_s - sum(times)) / min(times)),
+        settling = 0 if self.settle_s is None else min(max(math.ceil((self.settle_s - sum(times)) / min(times)),
+                                                           self.settle_repeats - len(times)),
                                                        self.max_repeats - len(times))
         return math.ceil(max(needed, settling, 1) / max(self.sweeps - sweep, 1))
 
