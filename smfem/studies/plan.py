@@ -415,9 +415,7 @@ def carried(studies: tuple[CaseStudy, ...], until: Until = FULL_UNTIL) -> tuple[
     """``studies`` with every series of more than one level carried ``until`` (:class:`Until`),
     or its own where it has one (CalculiX's explicit and modal: :data:`CCX_UNTIL`; the flywheel's
     3D reference: :data:`FLYWHEEL_3D_UNTIL`)."""
-    return tuple(replace(s, series=tuple(replace(x, until=x.until or until) if len(x.levels) > 1 else x
-                                         for x in s.series))
-                 for s in studies)
+    return _each_series(studies, lambda case, x: replace(x, until=x.until or until) if len(x.levels) > 1 else x)
 
 
 def full() -> tuple[CaseStudy, ...]:
