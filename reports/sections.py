@@ -105,8 +105,8 @@ def headline(ctx: ReportContext) -> list[Section]:
           "tables/timing.csv): their CPU time is the minimum over the repeats and each speed-up a ratio of minima, "
           "with its range over the repeats beside it (the other's fastest over SMFEM's slowest to the other's "
           "slowest over SMFEM's fastest). On the quick settings a run whose study shot took over "
-          f"{QUICK_TIMING.kept_s:g} s keeps that shot (0 repeats in tables/timing.csv), and one whose shot is over "
-          f"{QUICK_TIMING.rivals:g} times its rival's (SMFEM's other element, the other engine or procedure), which "
+          f"{QUICK_TIMING.kept_s:g} s keeps that shot (0 repeats in tables/timing.csv), and on any settings one whose "
+          f"shot is over {QUICK_TIMING.rivals:g} times its rival's (SMFEM's other element, the other engine or procedure), which "
           "cannot decide its row's cost, keeps it outside the pass. A reason in a cell is a numbered note under its "
           "table."),
         p("Stresses and plastic strains have rows of their own in each scene, outside the headline measure: each "

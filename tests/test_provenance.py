@@ -67,10 +67,20 @@ def test_a_solvers_runs_are_decided_by_its_own_numerics_and_the_common_sources()
     assert set(reference) | set(smfem) <= set(provenance.SOURCES) | set(provenance.COMMON)
 
 
+def test_a_studys_runs_do_not_pass_through_the_command_line():
+    """Why ``smfem/cli`` is no run's source (provenance.NOT_IN_A_RUN): the study and the worker
+    that executes its runs never import it."""
+    import subprocess
+    import sys
+    code = ("import sys, smfem.studies.study, smfem.studies.jobs, smfem.studies.executors; "
+            "print(sorted(m for m in sys.modules if m.startswith('smfem.cli')))")
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip() == "[]"
+
+
 def test_a_change_to_the_plan_alone_leaves_the_runs_made_from_these_sources(monkeypatch):
-    """The plan decides which runs a report asks for, provenance where they came from and the
-    timing pass how often the decisive ones are timed again, not what one gives: the comparison
-    of sources leaves them out, and only them."""
+    """The plan decides which runs a report asks for, provenance where they came from, the
+    timing pass how often the decisive ones are timed again and the command line what a user
+    asked for, not what one gives: the comparison of sources leaves them out, and only them."""
     asked = []
     monkeypatch.setattr(provenance, "_git", lambda *args: asked.append(args) or "")
     provenance.same_sources.cache_clear()
@@ -80,5 +90,6 @@ def test_a_change_to_the_plan_alone_leaves_the_runs_made_from_these_sources(monk
     assert args[:3] == ("diff", "--quiet", "b" * 40)
     assert [a for a in args if a.startswith(":(exclude)")] == [":(exclude)smfem/studies/plan.py",
                                                                 ":(exclude)smfem/studies/provenance.py",
-                                                                ":(exclude)smfem/studies/timing.py"]
+                                                                ":(exclude)smfem/studies/timing.py",
+                                                                ":(exclude)smfem/cli"]
     assert set(provenance.SOURCES) <= set(args)

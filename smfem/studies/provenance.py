@@ -29,9 +29,11 @@ COMMON = ("cases", "smfem/runs", "smfem/studies", "pyproject.toml")
 #: what no run passes through: the plan decides which runs a report asks for (the ladders, where
 #: each stops), this module where the runs came from and the timing pass how often the decisive
 #: ones are timed again (its times are the last pass's, its log resumed only by the same rule and
-#: module: ``reports.timing``), never what a run gives, so a run made before a change to them is
-#: the run the changed framework would make
-NOT_IN_A_RUN = ("smfem/studies/plan.py", "smfem/studies/provenance.py", "smfem/studies/timing.py")
+#: module: ``reports.timing``), the command line what a user asked for (a study's runs go from the
+#: plan to ``jobs.execute``, never through it; the run cache's key leaves it out too,
+#: ``cache.FRAMEWORK``), never what a run gives, so a run made before a change to them is the run
+#: the changed framework would make
+NOT_IN_A_RUN = ("smfem/studies/plan.py", "smfem/studies/provenance.py", "smfem/studies/timing.py", "smfem/cli")
 
 
 def sources_of(packages: tuple[str, ...]) -> tuple[str, ...]:
