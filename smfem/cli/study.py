@@ -39,7 +39,7 @@ def add(sub) -> None:
 def _timing(parser) -> None:
     from smfem.studies.timing import BUDGET_S, TimingRule
 
-    rule = TimingRule()
+    rule, quick = TimingRule(), TimingRule.of(False)
     parser.add_argument("--timing-budget", type=float, default=BUDGET_S, metavar="SECONDS",
                         help=f"the timing pass after the runs times each run behind the headline again, alone and "
                              f"by turns with its competitor, to {rule.repeats} repeats and {rule.total_s:g} CPU s, and "
@@ -48,10 +48,10 @@ def _timing(parser) -> None:
                              f"minimum (tables/timing.csv); a run over {rule.long_s:g} s is timed once, and once more while "
                              f"the pass stays within this many CPU s (default {BUDGET_S:g}); 0: never twice. The "
                              f"quick settings time only runs whose study shot took at most "
-                             f"{TimingRule.of(False).kept_s:g} s: a dearer run's shot stands (0 repeats; --retime times it), "
-                             f"and stop at {rule.repeats} repeats and {rule.total_s:g} CPU s over "
-                             f"{TimingRule.of(False).sweeps} sweeps. No pass times a run whose shot is over "
-                             f"{TimingRule.of(False).rivals:g} times its rival's (SMFEM's other element, the other engine "
+                             f"{quick.kept_s:g} s: a dearer run's shot stands (0 repeats; --retime times it), "
+                             f"and stop at {quick.repeats} repeats and {quick.total_s:g} CPU s over "
+                             f"{quick.sweeps} sweeps. No pass times a run whose shot is over "
+                             f"{quick.rivals:g} times its rival's (SMFEM's other element, the other engine "
                              f"or procedure): it cannot decide its cost")
     parser.add_argument("--no-timing", action="store_true",
                         help="no timing pass: the headline keeps the study's single-shot CPU times")
