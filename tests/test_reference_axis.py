@@ -136,15 +136,19 @@ def test_a_face_through_the_axis_has_a_normal_at_every_node(section):
     """The outer face (the bottom and top discs through the axis, the cylinder): each node's
     normal from the facets round it (reference_fem/face.py; a degenerate facet's collapsed
     corner has no Jacobian, so its normal is taken a hair inside), outward, and its area."""
-    from reference_fem.face import face_of
+    from reference_fem.face import AXIS_INSET, face_of
 
     model = Model(scene(section))
     face = face_of(model, "outer")
     x = model.nodes_x[:, face.nodes]
     r = np.hypot(x[0], x[1])
+    # on the discs the tangents a hair from a collapsed corner are O(AXIS_INSET) differences of
+    # O(1) coordinates, so their direction carries eps / AXIS_INSET of rounding (measured 7 times
+    # that on the top disc, z = 1; the error grows about as 1 / AXIS_INSET from 1e-4 to 1e-7)
+    rounding = 30 * np.finfo(float).eps / AXIS_INSET
     for plane, z in ((-1.0, 0.0), (1.0, 1.0)):
         on = np.isclose(x[2], z) & (r < 0.99)
-        assert (r[on] < 1e-12).any() and np.abs(face.normals[on] - [0.0, 0.0, plane]).max() < 1e-9
+        assert (r[on] < 1e-12).any() and np.abs(face.normals[on] - [0.0, 0.0, plane]).max() < rounding
     side = np.isclose(r, 1.0) & (x[2] > 0.01) & (x[2] < 0.99)
     assert np.abs(face.normals[side][:, :2] - (x[:2, side] / r[side]).T).max() < 1e-9
     assert face.area == pytest.approx(4 * np.pi, rel=2e-3)  # 8 quadratic arcs round
