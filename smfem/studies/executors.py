@@ -30,6 +30,10 @@ class _Feed:
         return jobs
 
 
+#: environment variables that change under a running session and that no worker reads: pytest
+#: names the current test in one, which would otherwise spawn every test its own pool
+_NOT_READ = frozenset({"PYTEST_CURRENT_TEST"})
+
 #: the local worker processes, kept between studies of one session (each spawned process
 #: imports numpy, scipy, the solvers: one to three CPU seconds before its first job)
 _pool: tuple[tuple, ProcessPoolExecutor] | None = None
@@ -40,7 +44,7 @@ def _workers(count: int) -> ProcessPoolExecutor:
     under other environment variables (``SMFEM_THREADS``, ``SMFEM_CCX``: a process reads them
     from the environment it was started with) is shut down and replaced."""
     global _pool
-    key = (count, tuple(sorted(os.environ.items())))
+    key = (count, tuple(sorted(item for item in os.environ.items() if item[0] not in _NOT_READ)))
     if _pool is not None and _pool[0] != key:
         _discard()
     if _pool is None:
