@@ -3,7 +3,8 @@ any valid set of parameters gives finite histories or a clear error.
 
 The mistakes are generated from each case's parameter specs, so a new key is covered as soon
 as it is declared. The property tests run tiny windows (at most 4 steps, few harmonics, refine
-at most 2; the reference solver in 2D) so that a hundred examples take well under a minute.
+at most 2; the reference solver in 2D) so that a hundred examples take well under a minute; the
+default run tries 20 of SMFEM's, and their slow twins (``-m slow``) 60 and 400.
 """
 
 from __future__ import annotations
@@ -57,9 +58,22 @@ def assert_one_clear_line(err: str, needle: str):
     assert err.startswith("smfem: error: ") and needle in err, err
 
 
+@pytest.fixture
+def one_parser(monkeypatch):
+    """For a test that sweeps ``main`` over a hundred bad values: the command line's parser built
+    once, not on every call (``main`` builds the same one anew each time, and pins the BLAS
+    threads this test process has pinned already: 30 ms a call, most of a sweep). What is
+    checked is what ``main`` does with the arguments: the parsing, the checks, the refusal."""
+    import smfem.cli
+
+    parser = smfem.cli.build_parser()
+    monkeypatch.setattr(smfem.cli, "build_parser", lambda: parser)
+    monkeypatch.setattr(smfem.cli.threads, "pin", lambda: 1)
+
+
 @pytest.mark.parametrize("name", CASES)
 @pytest.mark.parametrize("solver", ["smfem", "reference"])
-def test_every_key_out_of_range_exits_2_naming_the_key(name, solver):
+def test_every_key_out_of_range_exits_2_naming_the_key(name, solver, one_parser):
     """Every key of every case, every kind of bad value (past each bound, the open bounds, nan,
     inf, -inf, wrong types): exit 2, one line naming the key and its allowed range, nothing
     written."""
@@ -76,7 +90,7 @@ def test_every_key_out_of_range_exits_2_naming_the_key(name, solver):
 
 
 @pytest.mark.parametrize("solver", [s.name for s in solvers() if s.command_line and s.options()])
-def test_every_solver_option_out_of_range_exits_2_naming_it(solver):
+def test_every_solver_option_out_of_range_exits_2_naming_it(solver, one_parser):
     """A solver's own options (``--set anderson=-3``, ``relaxation=5``, ``grading=0``) are
     checked as case parameters are: exit 2, one line naming the option and its range, nothing
     written."""
@@ -276,9 +290,18 @@ def check_run(name, solver, sets):
     return code
 
 
-@settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=20, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(valid_run())
 def test_valid_parameters_give_finite_histories_or_a_clear_error(run):
+    """20 tiny runs with valid parameters; the slow twins below run 60 of them and 400 random
+    ones."""
+    check_run(*run)
+
+
+@pytest.mark.slow
+@settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(valid_run())
+def test_valid_parameters_give_finite_histories_or_a_clear_error_60_examples(run):
     check_run(*run)
 
 

@@ -56,11 +56,13 @@ def texts() -> list[str]:
 
 
 def test_the_whitelist_builds_what_sympify_built(texts):
-    """Bit-identical runs: the same expression, printed alike, so lambdify writes the same code."""
+    """Bit-identical runs: the same expression, printed alike, so lambdify writes the same code.
+    Mostly sympy's cache hands both the very same object, printed alike without printing it
+    (its srepr of the long ones: 2 s)."""
     assert len(texts) > 100 and max(map(len, texts)) > 5000
     for text in texts:
         ours, theirs = parse(text), sp.sympify(text, locals=TRUSTED)
-        assert ours == theirs and sp.srepr(ours) == sp.srepr(theirs), text
+        assert ours == theirs and (ours is theirs or sp.srepr(ours) == sp.srepr(theirs)), text
 
 
 def test_nothing_is_evaluated_as_code(texts, monkeypatch):

@@ -44,7 +44,9 @@ def test_a_scene_file_is_studied_with_every_solver_against_a_truth_made_for_it(p
     assert study.truth.method == EXPLICIT_TRUTH and study.truth.refine == (1, 2, 4)  # elastic-plastic: not modal
     assert [s.solver for s in study.series] == [SMFEM, SMFEM_QUAD9, REF2D, REF3D]
     study = replace(study, series=study.series[:3])  # the 3D run: two thirds of the study's CPU time
-    report = build((study,), tmp_path / "study", progress=False, document=False, timing=LIGHT_TIMING)
+    # one worker process throughout: the runs take tenths of a second, and two workers for the
+    # study besides the timing pass's one were three processes spawned, most of this test's time
+    report = build((study,), tmp_path / "study", workers=1, progress=False, document=False, timing=LIGHT_TIMING)
     head = pd.read_csv(tmp_path / "study" / "tables" / "headline.csv")
     assert set(head.case) == {"pipe"} and set(head.solver) == {SMFEM, SMFEM_QUAD9, REF2D}
     assert head.truth.str.startswith("reference-explicit").all() and (head.truth_uncertainty_pct > 0).all()
@@ -60,18 +62,19 @@ def test_a_scene_file_is_studied_with_every_solver_against_a_truth_made_for_it(p
     assert section.blocks[1]["text"].startswith("pipe: SMFEM reaches ")  # the verdict follows
 
     cache = RunCache(tmp_path / "study" / "runs")
-    assert run_study((study,), cache, progress=False).executed == []
+    assert run_study((study,), cache, workers=1, progress=False).executed == []
     # the same name, another load: SMFEM's run at the scene's settings is the new scene's, not the cached one
     pipe.write_text(pipe.read_text().replace("q = 1e7", "q = 2e7"))
     alone = replace(study_of(str(pipe), base=SHORT), series=(Series(SMFEM, ({},)),), reference=None, truth=None,
                     estimated=())
     anew = RunCache(cache.root)  # a cache reads a job's key once: a study sees its files as they were at its start
-    assert [job.solver for job in run_study((alone,), anew, progress=False).executed] == [SMFEM]
+    assert [job.solver for job in run_study((alone,), anew, workers=1, progress=False).executed] == [SMFEM]
 
 
 def test_the_truth_command_takes_a_scene_file(pipe, tmp_path, capsys):
     out = tmp_path / "truth"
-    assert main(["truth", str(pipe), "--set", "t_end=5e-5", "--out", str(out), "--quiet"]) == 0
+    # one worker: its three runs take a second, the processes' start most of the rest
+    assert main(["truth", str(pipe), "--set", "t_end=5e-5", "--workers", "1", "--out", str(out), "--quiet"]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["name"].startswith("reference-explicit") and 0 < summary["uncertainty"]["inner_ur"] < 1
     assert "inner_ur" in pd.read_csv(out / "history.csv").columns
