@@ -60,9 +60,18 @@ LONG_STUDIES = {
 }
 
 
+#: the files that keep one worker longest (--durations: test_report.py's tiny report fixture alone
+#: is about a minute), handed out first: --dist loadfile gives the workers whole files in
+#: collection order, and a long file handed out last runs on alone after the other worker is done
+HEAVY_FIRST = ("test_report.py", "test_benchmarks.py", "test_examples.py", "test_calculix.py",
+               "test_calculix_procedures.py", "test_manufactured.py")
+
+
 def pytest_collection_modifyitems(config, items):
     import pytest
 
+    order = {name: i for i, name in enumerate(HEAVY_FIRST)}
+    items.sort(key=lambda item: order.get(item.path.name, len(order)))  # stable: the rest keep their order
     seen = set()
     for item in items:
         key = item.nodeid.removeprefix("tests/")
