@@ -129,14 +129,26 @@ def body_force(u, body: str, E, nu, rho) -> list[sp.Expr]:
 
 def traction(u, body: str, E, nu, normal) -> list[sp.Expr]:
     """``sigma n`` on a surface of outward unit normal ``normal`` (components 1, 2, 3)."""
+    return list(_traction(tuple(u), body, E, nu, tuple(normal)))
+
+
+# the manufactured scenes are built again at every mesh, step and harmonic count of a study with
+# the same motion and material: their terms are derived once (sympy, 0.5-3 s a scene)
+@functools.lru_cache(maxsize=64)
+def _traction(u: tuple, body: str, E, nu, normal: tuple) -> tuple:
     s11, s22, s33, s12, s13, s23 = stresses(u, body, E, nu)
     tensor = sp.Matrix([[s11, s12, s13], [s12, s22, s23], [s13, s23, s33]])
-    return list(tensor * sp.Matrix(normal))
+    return tuple(tensor * sp.Matrix(normal))
 
 
 def motion_body_forces(U, time, body: str, E, nu, rho) -> tuple:
     """The body-force terms (:class:`cases.geometry.Force`) that make ``U(x) time(t)`` an
     exact motion: ``rho U`` times ``time''`` and ``-div sigma(U)`` times ``time``."""
+    return _motion_body_forces(tuple(U), time, body, E, nu, rho)
+
+
+@functools.lru_cache(maxsize=64)
+def _motion_body_forces(U: tuple, time, body: str, E, nu, rho) -> tuple:
     from .geometry import Force
 
     time, rho = sp.sympify(time), sp.sympify(rho)

@@ -90,32 +90,6 @@ def test_expressions_are_read_from_text_and_evaluated_on_arrays():
         mf.parse("x1 + y")
 
 
-@pytest.fixture(scope="module", autouse=True)
-def source_terms_derived_once():
-    """The runs below build the manufactured scenes at many meshes, steps and harmonics, and
-    :func:`cases.verification.build` derives the same source terms anew on every call (sympy:
-    0.5-3 s a call, most of it printing them): here each is derived once per motion, time
-    function and material and kept for this module. The terms are those of
-    :func:`cases.manufactured.motion_body_forces` and :func:`~cases.manufactured.traction`
-    (pure functions of their arguments), which the tests above also check on calls of their own."""
-    derived = {}
-
-    def once(function):
-        def cached(*args):
-            key = (function.__name__, *(tuple(a) if isinstance(a, list) else a for a in args))
-            if key not in derived:
-                derived[key] = function(*args)
-            result = derived[key]
-            return list(result) if isinstance(result, list) else result
-
-        return cached
-
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(mf, "motion_body_forces", once(mf.motion_body_forces))
-        patch.setattr(mf, "traction", once(mf.traction))
-        yield
-
-
 def _run(body, solver=SMFEM, drop_traction=False, **params):
     """A run of the manufactured scene (over 0.5 s unless ``t_end`` says otherwise) and its case;
     ``drop_traction``: without the force terms on edges (with ``free_top``, the traction that
